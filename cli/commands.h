@@ -1,0 +1,14 @@
+// polyheal CLI — one register function per subcommand (cmd_<name>.cpp).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace polyheal::cli {
+
+/// Exit codes shared by every command.
+enum Exit : int { kClean = 0, kDefects = 1, kError = 2 };
+
+/// Adds `check` to `app`; on run, stores the command's exit code in `exit_code`.
+void add_check(CLI::App& app, int& exit_code);
+
+}  // namespace polyheal::cli

@@ -1,0 +1,33 @@
+// polyheal — exact geometric predicates on double coordinates.
+//
+// Every function here returns the exact answer for the given doubles: values
+// are evaluated in interval arithmetic and, when the interval cannot decide,
+// again in exact rationals (the geogram/CGAL filter pattern). Angle thresholds
+// enter as the double nearest to cos(threshold); the comparison against that
+// double is exact. No CGAL in this header.
+#pragma once
+
+#include "polyheal/mesh/soup.h"
+
+namespace polyheal {
+
+/// True when a, b, c are exactly collinear (including repeated points).
+bool is_collinear(const Point3d& a, const Point3d& b, const Point3d& c);
+
+/// True when the angle at `apex` between rays to `b` and `c` is strictly
+/// greater (resp. smaller) than the angle whose cosine is `cos_threshold`.
+/// Precondition: b != apex and c != apex.
+bool angle_greater(const Point3d& apex, const Point3d& b, const Point3d& c, double cos_threshold);
+bool angle_less(const Point3d& apex, const Point3d& b, const Point3d& c, double cos_threshold);
+
+/// Faces (p, q, r) and (q, p, s) share the edge pq. True when the fold angle
+/// between them (0 when folded flat onto each other, 180 when the surface is
+/// flat) is strictly below the threshold. Precondition: neither is degenerate.
+bool fold_angle_less(const Point3d& p, const Point3d& q, const Point3d& r, const Point3d& s, double cos_threshold);
+
+/// True when triangle abc is not exactly degenerate but its area is tiny
+/// relative to its longest edge: |ab x ac| <= eps * longest_edge^2 (TetGen's
+/// relative collinearity tolerance, eps = 1e-8 by default).
+bool is_nearly_degenerate(const Point3d& a, const Point3d& b, const Point3d& c, double eps);
+
+}  // namespace polyheal

@@ -1,0 +1,159 @@
+#include "polyheal/inspect/report.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "polyheal/inspect/predicates.h"
+#include "polyheal/mesh/topology.h"
+#include "polyheal/mesh/weld.h"
+
+namespace polyheal {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+EdgeRef ref(const Edge& e) {
+  EdgeRef r{e.a, e.b, {}};
+  for (const EdgeUse& u : e.uses) r.faces.push_back(u.face);
+  return r;
+}
+
+enum class Shape : char { fine, degenerate, cap, needle };
+
+/// Botsch & Kobbelt §2 classification of one triangle, exactly.
+Shape classify(const Point3d& a, const Point3d& b, const Point3d& c, double cos_cap, double cos_needle) {
+  if (is_collinear(a, b, c)) return Shape::degenerate;
+  const Point3d* p[3] = {&a, &b, &c};
+  for (int k = 0; k < 3; ++k)
+    if (angle_greater(*p[k], *p[(k + 1) % 3], *p[(k + 2) % 3], cos_cap)) return Shape::cap;
+  for (int k = 0; k < 3; ++k)
+    if (angle_less(*p[k], *p[(k + 1) % 3], *p[(k + 2) % 3], cos_needle)) return Shape::needle;
+  return Shape::fine;
+}
+
+constexpr double kPi = 3.14159265358979323846;
+
+}  // namespace
+
+bool Report::certified_clean() const {
+  return faces > 0 && closed && manifold && oriented && degenerate_faces.empty() && duplicate_faces.empty() &&
+         self_intersections.empty();
+}
+
+Report inspect(const Soup& input, const InspectOptions& o) {
+  Report r;
+  auto t0 = std::chrono::steady_clock::now();
+  if (o.observer) o.observer->stage("topology");
+  const Weld weld = weld_identical_points(input.points);
+  const Soup soup = weld.merged ? apply_weld(input, weld) : input;
+  r.vertices = soup.points.size();
+  r.faces = soup.face_count();
+  r.merged_identical_vertices = weld.merged;
+  for (std::size_t f = 0; f < r.faces; ++f) r.non_triangle_faces += soup.face(f).size() != 3;
+
+  const Topology topo = analyze_topology(soup);
+  r.components = topo.components;
+  r.isolated_vertices = topo.isolated_vertices - weld.merged;  // welded-away twins are not isolated points
+  for (const Edge& e : topo.boundary_edges) r.boundary_edges.push_back(ref(e));
+  for (const Edge& e : topo.nonmanifold_edges) r.nonmanifold_edges.push_back(ref(e));
+  for (const Edge& e : topo.misoriented_edges) r.misoriented_edges.push_back(ref(e));
+  r.boundary_loops = topo.boundary_loops;
+  r.nonmanifold_vertices = topo.nonmanifold_vertices;
+  r.duplicate_faces = topo.duplicate_faces;
+  r.closed = r.boundary_edges.empty() && r.faces > 0;
+  r.manifold = r.nonmanifold_edges.empty() && r.nonmanifold_vertices.empty() && topo.repeated_index_faces.empty();
+  r.oriented = r.misoriented_edges.empty();
+  r.seconds_topology = seconds_since(t0);
+
+  // Shape of each face (fan triangles of polygons), exactly; in parallel.
+  t0 = std::chrono::steady_clock::now();
+  if (o.observer) o.observer->stage("degenerate faces, caps, needles");
+  const double cos_cap = std::cos(o.cap_angle * kPi / 180.0);
+  const double cos_needle = std::cos(o.needle_angle * kPi / 180.0);
+  std::vector<Shape> shape(r.faces, Shape::fine);
+  std::vector<char> near_degenerate(r.faces, 0);
+  auto classify_face = [&](std::size_t f) {
+    FaceView v = soup.face(f);
+    Shape worst = Shape::fine;
+    for (std::size_t k = 1; k + 1 < v.size(); ++k) {
+      const Point3d &a = soup.points[v[0]], &b = soup.points[v[k]], &c = soup.points[v[k + 1]];
+      const Shape s = classify(a, b, c, cos_cap, cos_needle);
+      if (s != Shape::fine && (worst == Shape::fine || s < worst)) worst = s;
+      if (s != Shape::degenerate && is_nearly_degenerate(a, b, c, o.tetgen_epsilon)) near_degenerate[f] = 1;
+    }
+    shape[f] = worst;
+  };
+  if (o.parallel)
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, r.faces, 4096), [&](const auto& range) {
+      for (std::size_t f = range.begin(); f != range.end(); ++f) classify_face(f);
+    });
+  else
+    for (std::size_t f = 0; f < r.faces; ++f) classify_face(f);
+  for (std::size_t f = 0; f < r.faces; ++f) {
+    if (shape[f] == Shape::degenerate) r.degenerate_faces.push_back(f);
+    if (shape[f] == Shape::cap) r.caps.push_back(f);
+    if (shape[f] == Shape::needle) r.needles.push_back(f);
+    if (near_degenerate[f]) r.nearly_degenerate_faces.push_back(f);
+  }
+  for (std::size_t f : topo.repeated_index_faces)
+    if (shape[f] != Shape::degenerate) r.degenerate_faces.push_back(f);  // a polygon repeating an index
+  std::sort(r.degenerate_faces.begin(), r.degenerate_faces.end());
+
+  // TetGen: adjacent triangles folded onto each other below its angle bound.
+  const double cos_fold = std::cos(o.tetgen_fold_angle * kPi / 180.0);
+  for (const Topology::InteriorEdge& e : topo.interior_edges) {
+    FaceView f0 = soup.face(e.face0), f1 = soup.face(e.face1);
+    if (f0.size() != 3 || f1.size() != 3 || shape[e.face0] == Shape::degenerate ||
+        shape[e.face1] == Shape::degenerate)
+      continue;
+    auto opposite = [&](FaceView v) {
+      for (Index i : v)
+        if (i != e.a && i != e.b) return i;
+      return v[0];
+    };
+    const Point3d &p = soup.points[e.a], &q = soup.points[e.b];
+    if (fold_angle_less(p, q, soup.points[opposite(f0)], soup.points[opposite(f1)], cos_fold))
+      r.sharp_folds.push_back({std::min<std::size_t>(e.face0, e.face1), std::max<std::size_t>(e.face0, e.face1)});
+  }
+  std::sort(r.sharp_folds.begin(), r.sharp_folds.end());
+
+  // Bounding box and signed volume (a measurement, not a predicate).
+  r.bbox_min = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                std::numeric_limits<double>::infinity()};
+  r.bbox_max = {-r.bbox_min[0], -r.bbox_min[1], -r.bbox_min[2]};
+  for (const Point3d& p : soup.points)
+    for (int a = 0; a < 3; ++a) {
+      r.bbox_min[a] = std::min(r.bbox_min[a], p[a]);
+      r.bbox_max[a] = std::max(r.bbox_max[a], p[a]);
+    }
+  if (soup.points.empty()) r.bbox_min = r.bbox_max = {0, 0, 0};
+  long double volume = 0;
+  for (std::size_t f = 0; f < r.faces; ++f) {
+    FaceView v = soup.face(f);
+    const Point3d& a = soup.points[v[0]];
+    for (std::size_t k = 1; k + 1 < v.size(); ++k) {
+      const Point3d &b = soup.points[v[k]], &c = soup.points[v[k + 1]];
+      volume += (long double)a[0] * ((long double)b[1] * c[2] - (long double)b[2] * c[1]) -
+                (long double)a[1] * ((long double)b[0] * c[2] - (long double)b[2] * c[0]) +
+                (long double)a[2] * ((long double)b[0] * c[1] - (long double)b[1] * c[0]);
+    }
+  }
+  r.signed_volume = static_cast<double>(volume / 6);
+  r.seconds_shape = seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  SelfIntersectionOptions si;
+  si.parallel = o.parallel;
+  si.observer = o.observer;
+  r.self_intersections = find_self_intersections(soup, si);
+  r.seconds_self_intersections = seconds_since(t0);
+  return r;
+}
+
+}  // namespace polyheal

@@ -1,0 +1,75 @@
+// polyheal — the exact inspection report: everything `polyheal check` says.
+//
+// inspect() welds identical points, then decides every geometric question
+// exactly on the soup's double coordinates (predicates.h, triangle_pair.h).
+// Degenerate, cap and needle faces follow Botsch & Kobbelt §2: a cap has an
+// angle above cap_angle, a needle an angle below needle_angle and is not a
+// cap; a degenerate face has a repeated vertex or exactly collinear corners
+// and is neither.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "polyheal/inspect/self_intersections.h"
+#include "polyheal/mesh/soup.h"
+#include "polyheal/observer.h"
+
+namespace polyheal {
+
+struct InspectOptions {
+  double cap_angle = 175.0;        // degrees; a face with a larger angle is a cap
+  double needle_angle = 5.0;       // degrees; a face with a smaller angle is a needle (unless a cap)
+  double tetgen_fold_angle = 0.1;  // degrees; TetGen's "nearly self-intersecting facets" bound
+  double tetgen_epsilon = 1e-8;    // TetGen's relative tolerance (-T): near-collinear faces
+  bool parallel = true;            // TBB in the self-intersection pass
+  Observer* observer = nullptr;
+};
+
+struct EdgeRef {
+  Index a, b;                       // welded vertex ids, a < b
+  std::vector<std::size_t> faces;   // faces using the edge
+};
+
+struct Report {
+  // counts
+  std::size_t vertices = 0;             // points in the file
+  std::size_t faces = 0;
+  std::size_t non_triangle_faces = 0;
+  std::size_t components = 0;           // faces connected through shared edges
+  std::size_t isolated_vertices = 0;    // points no face uses (after welding)
+  std::size_t merged_identical_vertices = 0;
+  // topology (after welding identical points)
+  std::vector<EdgeRef> boundary_edges;
+  std::size_t boundary_loops = 0;
+  std::vector<EdgeRef> nonmanifold_edges;
+  std::vector<Index> nonmanifold_vertices;
+  std::vector<EdgeRef> misoriented_edges;
+  std::vector<std::array<std::size_t, 2>> duplicate_faces;
+  // geometry, decided exactly
+  std::vector<std::size_t> degenerate_faces;
+  std::vector<std::size_t> caps;
+  std::vector<std::size_t> needles;
+  std::vector<FacePair> self_intersections;
+  // TetGen's tolerances (not exact defects)
+  std::vector<FacePair> sharp_folds;             // adjacent faces folded below tetgen_fold_angle
+  std::vector<std::size_t> nearly_degenerate_faces;
+  // shape
+  bool closed = false, manifold = false, oriented = false;
+  double signed_volume = 0.0;  // double sum of tetrahedra; meaningful when closed and oriented
+  std::array<double, 3> bbox_min{}, bbox_max{};
+  // time per stage, seconds
+  double seconds_topology = 0, seconds_shape = 0, seconds_self_intersections = 0;
+
+  /// Closed, 2-manifold, consistently oriented, no degenerate face, no
+  /// duplicate face, no self-intersection, at least one face.
+  bool certified_clean() const;
+  /// certified_clean() and nothing TetGen's tolerances would trip over.
+  bool tetgen_ready() const { return certified_clean() && sharp_folds.empty() && nearly_degenerate_faces.empty(); }
+};
+
+Report inspect(const Soup& soup, const InspectOptions& options = {});
+
+}  // namespace polyheal

@@ -1,0 +1,35 @@
+// polyheal — global exact self-intersection detection on a soup.
+//
+// Broad phase: CGAL::box_self_intersection_d over face bounding boxes (exact
+// for double input). Narrow phase: detail/triangle_pair.h, exact, with the
+// shared-vertex semantics of PMP::self_intersections. Faces share a vertex when
+// they share an index: pass a welded soup (mesh/weld.h) to share by position.
+// Polygons are fan-triangulated; pairs are reported by face id.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "polyheal/mesh/soup.h"
+#include "polyheal/observer.h"
+
+namespace polyheal {
+
+struct FacePair {
+  std::size_t first, second;  // first < second
+  bool operator==(const FacePair& o) const { return first == o.first && second == o.second; }
+  bool operator<(const FacePair& o) const { return first != o.first ? first < o.first : second < o.second; }
+};
+
+struct SelfIntersectionOptions {
+  bool parallel = true;           // TBB broad + narrow phase (2 cores: measured ~1.7x, BENCHMARKS.md)
+  Observer* observer = nullptr;
+};
+
+/// Every intersecting pair of faces, sorted.
+std::vector<FacePair> find_self_intersections(const Soup& soup, const SelfIntersectionOptions& options = {});
+
+/// Early-exit form: true at the first intersecting pair found.
+bool does_self_intersect(const Soup& soup, const SelfIntersectionOptions& options = {});
+
+}  // namespace polyheal

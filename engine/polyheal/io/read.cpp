@@ -1,0 +1,632 @@
+#include "polyheal/io/read.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <unordered_map>
+
+#include "polyheal/mesh/weld.h"
+
+namespace polyheal {
+namespace {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return s;
+}
+
+// ---------------------------------------------------------------------------
+// Text scanning with line tracking.
+
+struct Text {
+  const char* p;
+  const char* end;
+  std::size_t line = 1;
+  const std::string& name;
+
+  [[noreturn]] void fail(const std::string& reason) const {
+    throw InputError(name, "line " + std::to_string(line), reason);
+  }
+  bool at_end() const { return p >= end; }
+  static bool blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+  void skip_blanks() {
+    while (p < end && blank(*p)) ++p;
+  }
+  bool at_eol() {
+    skip_blanks();
+    return p >= end || *p == '\n' || *p == '#';
+  }
+  /// Skips the rest of the current line, including its newline.
+  void next_line() {
+    while (p < end && *p != '\n') ++p;
+    if (p < end) {
+      ++p;
+      ++line;
+    }
+  }
+  /// Skips blank lines and `#` comment lines; stops at the first content.
+  void skip_empty_lines() {
+    for (;;) {
+      skip_blanks();
+      if (p < end && (*p == '\n' || *p == '#')) {
+        next_line();
+        continue;
+      }
+      return;
+    }
+  }
+  /// Next whitespace-delimited token on the current line (empty at end of line).
+  std::string_view token() {
+    skip_blanks();
+    const char* b = p;
+    while (p < end && !blank(*p) && *p != '\n') ++p;
+    return {b, static_cast<std::size_t>(p - b)};
+  }
+  std::string_view token_required(const char* what) {
+    std::string_view t = at_eol() ? std::string_view{} : token();
+    if (t.empty()) fail(std::string("missing ") + what);
+    return t;
+  }
+  double number(const char* what) { return parse_double(token_required(what), what); }
+  long long integer(const char* what) { return parse_int(token_required(what), what); }
+
+  double parse_double(std::string_view t, const char* what) const {
+    std::string_view s = t;
+    if (!s.empty() && s[0] == '+') s.remove_prefix(1);
+    double v = 0;
+    auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (ec == std::errc::result_out_of_range) fail(std::string(what) + " '" + std::string(t) + "' is out of double range");
+    if (ec != std::errc() || ptr != s.data() + s.size() || s.empty())
+      fail(std::string("non-numeric ") + what + " '" + std::string(t.substr(0, 40)) + "'");
+    if (!std::isfinite(v)) fail(std::string("non-finite ") + what + " '" + std::string(t) + "'");
+    return v;
+  }
+  long long parse_int(std::string_view t, const char* what) const {
+    std::string_view s = t;
+    if (!s.empty() && s[0] == '+') s.remove_prefix(1);
+    long long v = 0;
+    auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (ec != std::errc() || ptr != s.data() + s.size() || s.empty())
+      fail(std::string("non-integer ") + what + " '" + std::string(t.substr(0, 40)) + "'");
+    return v;
+  }
+};
+
+void check_index(const Text& t, long long i, std::size_t nv) {
+  if (i < 0 || static_cast<unsigned long long>(i) >= nv)
+    t.fail("vertex index " + std::to_string(i) + " out of range [0, " + std::to_string(nv) + ")");
+}
+
+/// Refuses declared counts that cannot fit in the bytes that are left, before
+/// anything is allocated (a header claiming 10^12 faces must not allocate).
+void check_declared(const Text& t, unsigned long long count, unsigned long long min_bytes_each,
+                    const char* what) {
+  const auto left = static_cast<unsigned long long>(t.end - t.p);
+  if (count > 0 && (count > left / min_bytes_each + 1))
+    t.fail("declares " + std::to_string(count) + " " + what + " but only " + std::to_string(left) +
+           " bytes follow");
+}
+
+// ---------------------------------------------------------------------------
+// OFF
+
+Soup parse_off(const std::string& bytes, const std::string& name) {
+  Text t{bytes.data(), bytes.data() + bytes.size(), 1, name};
+  t.skip_empty_lines();
+  std::string_view head = t.token();
+  // Some writers glue the counts to the keyword line ("OFF 8 6 0").
+  static const char* kHeaders[] = {"OFF", "COFF", "NOFF", "CNOFF", "NCOFF", "STOFF", "STCOFF", "STCNOFF"};
+  bool ok = std::any_of(std::begin(kHeaders), std::end(kHeaders), [&](const char* h) { return head == h; });
+  if (!ok) {
+    if (head.size() >= 3 && head.substr(head.size() - 3) == "OFF")
+      t.fail("unsupported OFF variant '" + std::string(head) + "' (only 3D OFF is read)");
+    t.fail("wrong header: expected 'OFF', found '" + std::string(head.substr(0, 40)) + "'");
+  }
+  if (!t.at_eol()) {
+    std::string_view peek = t.token();
+    if (peek == "BINARY") t.fail("binary OFF is not supported");
+    t.p = peek.data();  // counts on the header line
+  } else {
+    t.next_line();
+    t.skip_empty_lines();
+  }
+  long long nv = t.integer("vertex count");
+  long long nf = t.integer("face count");
+  if (!t.at_eol()) t.integer("edge count");
+  if (nv < 0 || nf < 0) t.fail("negative vertex or face count");
+  t.next_line();
+  check_declared(t, static_cast<unsigned long long>(nv), 5, "vertices");
+  check_declared(t, static_cast<unsigned long long>(nf), 7, "faces");
+  check_declared(t, static_cast<unsigned long long>(nv) * 5 + static_cast<unsigned long long>(nf) * 7, 1,
+                 "bytes of vertices and faces");
+
+  Soup s;
+  s.points.reserve(static_cast<std::size_t>(nv));
+  for (long long i = 0; i < nv; ++i) {
+    t.skip_empty_lines();
+    if (t.at_end()) t.fail("file ends after " + std::to_string(i) + " of " + std::to_string(nv) + " vertices");
+    Point3d p{t.number("coordinate"), t.number("coordinate"), t.number("coordinate")};
+    s.points.push_back(p);
+    t.next_line();  // colours, normals, texture coordinates: ignored
+  }
+  s.offsets.reserve(static_cast<std::size_t>(nf) + 1);
+  s.indices.reserve(static_cast<std::size_t>(nf) * 3);
+  for (long long f = 0; f < nf; ++f) {
+    t.skip_empty_lines();
+    if (t.at_end()) t.fail("file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
+    long long n = t.integer("face size");
+    if (n < 3) t.fail("face with " + std::to_string(n) + " vertices (fewer than 3)");
+    if (static_cast<unsigned long long>(n) > static_cast<unsigned long long>(t.end - t.p))
+      t.fail("face declares " + std::to_string(n) + " vertices, more than the bytes left");
+    for (long long k = 0; k < n; ++k) {
+      long long i = t.integer("vertex index");
+      check_index(t, i, s.points.size());
+      s.indices.push_back(static_cast<Index>(i));
+    }
+    s.offsets.push_back(s.indices.size());
+    t.next_line();  // face colours: ignored
+  }
+  t.skip_empty_lines();
+  if (!t.at_end()) t.fail("unexpected data after the " + std::to_string(nf) + " declared faces");
+  return s;
+}
+
+// ---------------------------------------------------------------------------
+// OBJ
+
+Soup parse_obj(const std::string& bytes, const std::string& name) {
+  Text t{bytes.data(), bytes.data() + bytes.size(), 1, name};
+  Soup s;
+  std::int32_t group = -1;
+  std::unordered_map<std::string, std::int32_t> group_ids;
+  struct Pending {
+    std::size_t line;
+    long long index;
+  };
+  std::vector<Pending> forward;  // positive indices beyond the vertices seen so far
+  std::vector<long long> face;
+  while (!t.at_end()) {
+    t.skip_empty_lines();
+    if (t.at_end()) break;
+    std::string_view kw = t.token();
+    if (kw == "v") {
+      s.points.push_back({t.number("coordinate"), t.number("coordinate"), t.number("coordinate")});
+    } else if (kw == "f") {
+      face.clear();
+      while (!t.at_eol()) {
+        std::string_view tok = t.token();
+        std::string_view first = tok.substr(0, tok.find('/'));
+        long long i = t.parse_int(first, "vertex index");
+        if (i == 0) t.fail("vertex index 0 (OBJ indices start at 1)");
+        if (i < 0) {
+          i = static_cast<long long>(s.points.size()) + i;
+          if (i < 0) t.fail("relative vertex index " + std::string(first) + " before the first vertex");
+        } else {
+          i -= 1;
+          if (static_cast<std::size_t>(i) >= s.points.size()) forward.push_back({t.line, i});
+        }
+        face.push_back(i);
+      }
+      if (face.size() < 3) t.fail("face with " + std::to_string(face.size()) + " vertices (fewer than 3)");
+      for (long long i : face) s.indices.push_back(static_cast<Index>(i));
+      s.offsets.push_back(s.indices.size());
+      s.face_group.push_back(group);
+    } else if (kw == "g") {
+      std::string gname;
+      while (!t.at_eol()) {
+        if (!gname.empty()) gname += ' ';
+        gname += std::string(t.token());
+      }
+      if (gname.empty()) gname = "default";
+      auto [it, inserted] = group_ids.emplace(gname, static_cast<std::int32_t>(s.group_names.size()));
+      if (inserted) s.group_names.push_back(gname);
+      group = it->second;
+    } else if (kw.empty() || !std::all_of(kw.begin(), kw.end(), [](char c) {
+                 return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+               })) {
+      t.fail("not an OBJ statement: '" + std::string(kw.substr(0, 40)) + "'");
+    }
+    // vt, vn, vp, o, s, l, usemtl, mtllib, ...: not geometry we read.
+    t.next_line();
+  }
+  for (const Pending& f : forward)
+    if (static_cast<std::size_t>(f.index) >= s.points.size())
+      throw InputError(name, "line " + std::to_string(f.line),
+                       "vertex index " + std::to_string(f.index + 1) + " out of range [1, " +
+                           std::to_string(s.points.size()) + "]");
+  if (s.group_names.empty()) s.face_group.clear();
+  if (s.face_count() == 0) throw InputError(name, "", "no faces ('f' statements) in OBJ file");
+  return s;
+}
+
+// ---------------------------------------------------------------------------
+// STL
+
+/// Adds a triangle, welding its corners on identical coordinates.
+struct StlWelder {
+  Soup& soup;
+  std::unordered_map<std::string, Index> ids;
+  Index id(const Point3d& p) {
+    Point3d q{p[0] + 0.0, p[1] + 0.0, p[2] + 0.0};  // +0.0 and -0.0 are one point
+    std::string key(reinterpret_cast<const char*>(q.data()), sizeof q);
+    auto [it, inserted] = ids.emplace(std::move(key), static_cast<Index>(soup.points.size()));
+    if (inserted) soup.points.push_back(p);
+    return it->second;
+  }
+};
+
+Soup parse_stl_ascii(const std::string& bytes, const std::string& name) {
+  Text t{bytes.data(), bytes.data() + bytes.size(), 1, name};
+  Soup s;
+  StlWelder weld{s, {}};
+  auto expect = [&](std::string_view word) {
+    t.skip_empty_lines();
+    std::string_view got = t.token();
+    if (got != word)
+      t.fail("expected '" + std::string(word) + "', found '" + std::string(got.substr(0, 40)) + "'");
+  };
+  bool any_solid = false;
+  for (;;) {
+    t.skip_empty_lines();
+    if (t.at_end()) break;
+    expect("solid");
+    any_solid = true;
+    t.next_line();  // solid name
+    for (;;) {
+      t.skip_empty_lines();
+      if (t.at_end()) t.fail("file ends inside a solid (missing 'endsolid')");
+      std::string_view kw = t.token();
+      if (kw == "endsolid") {
+        t.next_line();
+        break;
+      }
+      if (kw != "facet") t.fail("expected 'facet' or 'endsolid', found '" + std::string(kw.substr(0, 40)) + "'");
+      t.next_line();  // normal: ignored, recomputed from the vertices when needed
+      expect("outer");
+      t.next_line();
+      Index c[3];
+      for (int k = 0; k < 3; ++k) {
+        expect("vertex");
+        c[k] = weld.id({t.number("coordinate"), t.number("coordinate"), t.number("coordinate")});
+        if (!t.at_eol()) t.fail("extra data after vertex coordinates");
+        t.next_line();
+      }
+      t.skip_empty_lines();
+      if (t.token() != "endloop") t.fail("facet with more than 3 vertices or missing 'endloop'");
+      t.next_line();
+      expect("endfacet");
+      t.next_line();
+      s.add_triangle(c[0], c[1], c[2]);
+    }
+  }
+  if (!any_solid) t.fail("no 'solid' in ASCII STL");
+  return s;
+}
+
+template <class T>
+T load_le(const char* p) {
+  T v;
+  std::memcpy(&v, p, sizeof v);  // x86/ARM little endian; STL is little endian
+  return v;
+}
+
+Soup parse_stl_binary(const std::string& bytes, const std::string& name) {
+  const std::uint32_t n = load_le<std::uint32_t>(bytes.data() + 80);
+  Soup s;
+  StlWelder weld{s, {}};
+  weld.ids.reserve(n / 2 + 1);
+  s.points.reserve(n / 2 + 3);
+  s.indices.reserve(3ull * n);
+  s.offsets.reserve(n + 1ull);
+  for (std::uint32_t f = 0; f < n; ++f) {
+    const char* rec = bytes.data() + 84 + 50ull * f;
+    Index c[3];
+    for (int k = 0; k < 3; ++k) {
+      Point3d p;
+      for (int a = 0; a < 3; ++a) {
+        float x = load_le<float>(rec + 12 + 12 * k + 4 * a);
+        if (!std::isfinite(x))
+          throw InputError(name, "byte " + std::to_string(84 + 50ull * f + 12 + 12 * k + 4 * a),
+                           "non-finite coordinate in triangle " + std::to_string(f));
+        p[a] = static_cast<double>(x);
+      }
+      c[k] = weld.id(p);
+    }
+    s.add_triangle(c[0], c[1], c[2]);
+  }
+  return s;
+}
+
+bool looks_ascii_stl(const std::string& bytes) {
+  std::size_t i = 0;
+  while (i < bytes.size() && std::isspace(static_cast<unsigned char>(bytes[i]))) ++i;
+  if (bytes.compare(i, 5, "solid") != 0) return false;
+  const std::size_t probe = std::min<std::size_t>(bytes.size(), 1024);
+  if (std::memchr(bytes.data(), '\0', probe)) return false;
+  std::string head = bytes.substr(0, probe);
+  return head.find("facet") != std::string::npos || head.find("endsolid") != std::string::npos;
+}
+
+Soup parse_stl(const std::string& bytes, const std::string& name) {
+  if (looks_ascii_stl(bytes)) return parse_stl_ascii(bytes, name);
+  if (bytes.size() < 84)
+    throw InputError(name, "byte " + std::to_string(bytes.size()),
+                     "not ASCII STL and too short for binary STL (84-byte header)");
+  const std::uint32_t n = load_le<std::uint32_t>(bytes.data() + 80);
+  const unsigned long long want = 84ull + 50ull * n;
+  if (bytes.size() != want)
+    throw InputError(name, "byte 80",
+                     "binary STL declares " + std::to_string(n) + " triangles (" + std::to_string(want) +
+                         " bytes) but the file has " + std::to_string(bytes.size()) + " bytes");
+  return parse_stl_binary(bytes, name);
+}
+
+// ---------------------------------------------------------------------------
+// PLY
+
+enum class PlyType { i8, u8, i16, u16, i32, u32, f32, f64 };
+
+std::size_t ply_size(PlyType t) {
+  switch (t) {
+    case PlyType::i8: case PlyType::u8: return 1;
+    case PlyType::i16: case PlyType::u16: return 2;
+    case PlyType::i32: case PlyType::u32: case PlyType::f32: return 4;
+    case PlyType::f64: return 8;
+  }
+  return 0;
+}
+
+bool ply_type(std::string_view s, PlyType& t) {
+  static const std::pair<const char*, PlyType> table[] = {
+      {"char", PlyType::i8},    {"int8", PlyType::i8},     {"uchar", PlyType::u8},   {"uint8", PlyType::u8},
+      {"short", PlyType::i16},  {"int16", PlyType::i16},   {"ushort", PlyType::u16}, {"uint16", PlyType::u16},
+      {"int", PlyType::i32},    {"int32", PlyType::i32},   {"uint", PlyType::u32},   {"uint32", PlyType::u32},
+      {"float", PlyType::f32},  {"float32", PlyType::f32}, {"double", PlyType::f64}, {"float64", PlyType::f64}};
+  for (auto& [n, ty] : table)
+    if (s == n) {
+      t = ty;
+      return true;
+    }
+  return false;
+}
+
+struct PlyProperty {
+  std::string name;
+  bool is_list = false;
+  PlyType count_type = PlyType::u8;
+  PlyType type = PlyType::f32;
+};
+struct PlyElement {
+  std::string name;
+  unsigned long long count = 0;
+  std::vector<PlyProperty> props;
+};
+
+/// Reads binary PLY values of either endianness, tracking the byte offset.
+struct PlyBinary {
+  const std::string& bytes;
+  std::size_t pos;
+  bool big_endian;
+  const std::string& name;
+
+  [[noreturn]] void fail(const std::string& reason) const {
+    throw InputError(name, "byte " + std::to_string(pos), reason);
+  }
+  double read(PlyType t) {
+    const std::size_t n = ply_size(t);
+    if (pos + n > bytes.size()) fail("file ends inside the data (truncated binary PLY)");
+    unsigned char b[8];
+    std::memcpy(b, bytes.data() + pos, n);
+    if (big_endian) std::reverse(b, b + n);
+    pos += n;
+    switch (t) {
+      case PlyType::i8: { std::int8_t v; std::memcpy(&v, b, 1); return v; }
+      case PlyType::u8: return b[0];
+      case PlyType::i16: { std::int16_t v; std::memcpy(&v, b, 2); return v; }
+      case PlyType::u16: { std::uint16_t v; std::memcpy(&v, b, 2); return v; }
+      case PlyType::i32: { std::int32_t v; std::memcpy(&v, b, 4); return v; }
+      case PlyType::u32: { std::uint32_t v; std::memcpy(&v, b, 4); return v; }
+      case PlyType::f32: { float v; std::memcpy(&v, b, 4); return v; }
+      case PlyType::f64: { double v; std::memcpy(&v, b, 8); return v; }
+    }
+    return 0;
+  }
+};
+
+Soup parse_ply(const std::string& bytes, const std::string& name) {
+  Text t{bytes.data(), bytes.data() + bytes.size(), 1, name};
+  if (t.token() != "ply") t.fail("wrong header: expected 'ply'");
+  t.next_line();
+  enum { ascii, le, be } format = ascii;
+  bool have_format = false;
+  std::vector<PlyElement> elements;
+  for (;;) {
+    if (t.at_end()) t.fail("file ends inside the header (no 'end_header')");
+    std::string_view kw = t.token();
+    if (kw == "end_header") {
+      t.next_line();
+      break;
+    }
+    if (kw == "format") {
+      std::string_view f = t.token();
+      if (f == "ascii") format = ascii;
+      else if (f == "binary_little_endian") format = le;
+      else if (f == "binary_big_endian") format = be;
+      else t.fail("unknown PLY format '" + std::string(f) + "'");
+      have_format = true;
+    } else if (kw == "element") {
+      PlyElement e;
+      e.name = std::string(t.token_required("element name"));
+      long long c = t.integer("element count");
+      if (c < 0) t.fail("negative element count");
+      e.count = static_cast<unsigned long long>(c);
+      elements.push_back(std::move(e));
+    } else if (kw == "property") {
+      if (elements.empty()) t.fail("property before any element");
+      PlyProperty p;
+      std::string_view ty = t.token_required("property type");
+      if (ty == "list") {
+        p.is_list = true;
+        if (!ply_type(t.token_required("list count type"), p.count_type)) t.fail("unknown list count type");
+        if (ply_type(t.token_required("list item type"), p.type) == false) t.fail("unknown list item type");
+      } else if (!ply_type(ty, p.type)) {
+        t.fail("unknown property type '" + std::string(ty) + "'");
+      }
+      p.name = std::string(t.token_required("property name"));
+      elements.back().props.push_back(std::move(p));
+    } else if (kw != "comment" && kw != "obj_info" && !kw.empty()) {
+      t.fail("unexpected header line '" + std::string(kw.substr(0, 40)) + "'");
+    }
+    t.next_line();
+  }
+  if (!have_format) t.fail("PLY header has no 'format' line");
+
+  // Locate vertex coordinates and face indices; validate counts against size.
+  const PlyElement* vert = nullptr;
+  const PlyElement* face = nullptr;
+  for (const PlyElement& e : elements) {
+    if (e.name == "vertex") vert = &e;
+    if (e.name == "face") face = &e;
+    unsigned long long min_record = 0;
+    for (const PlyProperty& p : e.props) min_record += format == ascii ? 2 : ply_size(p.is_list ? p.count_type : p.type);
+    if (min_record == 0) min_record = 1;
+    if (format == ascii) check_declared(t, e.count, min_record, ("'" + e.name + "' records").c_str());
+  }
+  if (!vert) throw InputError(name, "header", "PLY has no 'vertex' element");
+  if (!face) throw InputError(name, "header", "PLY has no 'face' element");
+  int xyz[3] = {-1, -1, -1};
+  for (std::size_t k = 0; k < vert->props.size(); ++k)
+    for (int a = 0; a < 3; ++a)
+      if (vert->props[k].name == std::string(1, char('x' + a)) && !vert->props[k].is_list) xyz[a] = int(k);
+  if (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0) throw InputError(name, "header", "PLY vertex lacks x, y or z");
+  int list = -1;
+  for (std::size_t k = 0; k < face->props.size(); ++k)
+    if (face->props[k].is_list && (face->props[k].name == "vertex_indices" || face->props[k].name == "vertex_index"))
+      list = int(k);
+  if (list < 0) throw InputError(name, "header", "PLY face lacks a 'vertex_indices' list");
+
+  Soup s;
+  PlyBinary bin{bytes, static_cast<std::size_t>(t.p - bytes.data()), format == be, name};
+  if (format != ascii) {
+    unsigned long long need = 0, left = bytes.size() - bin.pos;
+    for (const PlyElement& e : elements) {
+      unsigned long long rec = 0;
+      for (const PlyProperty& p : e.props) rec += ply_size(p.is_list ? p.count_type : p.type);
+      if (rec && e.count > left / rec) bin.fail("declares " + std::to_string(e.count) + " '" + e.name +
+                                                "' records but only " + std::to_string(left) + " bytes follow");
+      need += e.count * rec;
+      if (need > left) bin.fail("declared elements need at least " + std::to_string(need) + " bytes but only " +
+                                std::to_string(left) + " follow");
+    }
+    s.points.reserve(vert->count);
+    s.offsets.reserve(face->count + 1);
+  }
+  std::vector<double> values;
+  for (const PlyElement& e : elements) {
+    const bool is_vert = &e == vert, is_face = &e == face;
+    for (unsigned long long r = 0; r < e.count; ++r) {
+      if (format == ascii) {
+        t.skip_empty_lines();
+        if (t.at_end()) t.fail("file ends after " + std::to_string(r) + " of " + std::to_string(e.count) +
+                               " '" + e.name + "' records");
+      }
+      Point3d pt{};
+      for (std::size_t k = 0; k < e.props.size(); ++k) {
+        const PlyProperty& p = e.props[k];
+        auto value = [&](PlyType ty, const char* what) {
+          if (format == ascii) {
+            std::string_view tok = t.token_required(what);
+            return (ty == PlyType::f32 || ty == PlyType::f64) ? t.parse_double(tok, what)
+                                                              : double(t.parse_int(tok, what));
+          }
+          const std::size_t at = bin.pos;
+          double v = bin.read(ty);
+          if (!std::isfinite(v)) { bin.pos = at; bin.fail(std::string("non-finite ") + what); }
+          return v;
+        };
+        if (!p.is_list) {
+          double v = value(p.type, "value");
+          if (is_vert) for (int a = 0; a < 3; ++a) if (int(k) == xyz[a]) pt[a] = v;
+          continue;
+        }
+        double n = value(p.count_type, "list size");
+        if (n < 0) { if (format == ascii) t.fail("negative list size"); bin.fail("negative list size"); }
+        values.clear();
+        for (double i = 0; i < n; ++i) values.push_back(value(p.type, "list item"));
+        if (is_face && int(k) == list) {
+          if (values.size() < 3) {
+            const std::string why = "face with " + std::to_string(values.size()) + " vertices (fewer than 3)";
+            if (format == ascii) t.fail(why);
+            bin.fail(why);
+          }
+          for (double i : values) {
+            if (i < 0 || i >= double(vert->count) || i != std::floor(i)) {
+              const std::string why = "vertex index " + std::to_string((long long)i) + " out of range [0, " +
+                                      std::to_string(vert->count) + ")";
+              if (format == ascii) t.fail(why);
+              bin.fail(why);
+            }
+            s.indices.push_back(static_cast<Index>(i));
+          }
+          s.offsets.push_back(s.indices.size());
+        }
+      }
+      if (is_vert) s.points.push_back(pt);
+      if (format == ascii) {
+        if (!t.at_eol()) t.fail("extra values in '" + e.name + "' record");
+        t.next_line();
+      }
+    }
+  }
+  if (format == ascii) {
+    t.skip_empty_lines();
+    if (!t.at_end()) t.fail("unexpected data after the declared elements");
+  } else if (bin.pos != bytes.size()) {
+    bin.fail("unexpected " + std::to_string(bytes.size() - bin.pos) + " bytes after the declared elements");
+  }
+  return s;
+}
+
+}  // namespace
+
+Format format_from_path(const std::string& path) {
+  std::string ext = lower(std::filesystem::path(path).extension().string());
+  if (ext == ".off") return Format::off;
+  if (ext == ".obj") return Format::obj;
+  if (ext == ".stl") return Format::stl;
+  if (ext == ".ply") return Format::ply;
+  throw InputError(path, "", "unknown file extension '" + ext + "' (expected .off, .obj, .stl or .ply)");
+}
+
+Soup parse_soup(const std::string& bytes, Format format, const std::string& name) {
+  if (bytes.empty()) throw InputError(name, "", "empty file");
+  switch (format) {
+    case Format::off: return parse_off(bytes, name);
+    case Format::obj: return parse_obj(bytes, name);
+    case Format::stl: return parse_stl(bytes, name);
+    case Format::ply: return parse_ply(bytes, name);
+  }
+  throw InputError(name, "", "unknown format");
+}
+
+Soup read_soup(const std::string& path) {
+  const Format format = format_from_path(path);
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError(path, "", "is a directory, not a mesh file");
+  if (!std::filesystem::exists(path, ec)) throw InputError(path, "", "no such file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", std::string("cannot open: ") + std::strerror(errno));
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size < 0) throw InputError(path, "", "cannot determine file size (not a regular file?)");
+  in.seekg(0);
+  std::string bytes(static_cast<std::size_t>(size), '\0');
+  if (size > 0 && !in.read(bytes.data(), size)) throw InputError(path, "", "read error");
+  return parse_soup(bytes, format, path);
+}
+
+}  // namespace polyheal

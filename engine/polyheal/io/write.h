@@ -1,0 +1,42 @@
+// polyheal — writing meshes.
+//
+// Doubles are written in their shortest round-trip form (std::to_chars), so
+// reading the file back yields the same bits; binary PLY stores doubles as
+// float64. STL can only hold float32: writing STL rounds, and the returned
+// WriteInfo says so (certify-after-rounding then checks what was written).
+//
+// Writes are atomic: a temporary file in the target directory, flushed, then
+// renamed over the target. On any failure the target is untouched.
+#pragma once
+
+#include <string>
+
+#include "polyheal/io/read.h"
+#include "polyheal/mesh/soup.h"
+
+namespace polyheal {
+
+struct WriteOptions {
+  bool ascii = false;            // STL and PLY: ASCII instead of binary
+  bool allow_overwrite = false;  // replace an existing file at the target path
+};
+
+struct WriteInfo {
+  Format format = Format::off;
+  bool coordinates_rounded = false;  // true when the format could not hold every double (STL)
+  std::size_t bytes = 0;
+};
+
+/// Serialises `soup` in `format` (no file system access).
+std::string serialize_soup(const Soup& soup, Format format, bool ascii, bool* rounded = nullptr);
+
+/// Writes `soup` to `path` atomically (format from the extension). Throws
+/// OutputError when the target exists and overwriting was not allowed, or on
+/// an I/O failure; the target is then untouched.
+WriteInfo write_soup(const Soup& soup, const std::string& path, const WriteOptions& options = {});
+
+/// Throws OutputError when `output` names the same file as `input`, unless
+/// `allow` is set: a repair must never clobber its input by accident.
+void refuse_to_clobber(const std::string& input, const std::string& output, bool allow);
+
+}  // namespace polyheal

@@ -1,0 +1,78 @@
+#include "polyheal/mesh/convert.h"
+
+#include <unordered_map>
+
+#include "polyheal/mesh/topology.h"
+#include "polyheal/mesh/weld.h"
+
+namespace polyheal {
+namespace {
+
+std::string faces_of(const Edge& e) {
+  std::string s;
+  for (const EdgeUse& u : e.uses) s += (s.empty() ? "" : ", ") + std::to_string(u.face);
+  return s;
+}
+std::string edge_name(const Edge& e) { return "edge (" + std::to_string(e.a) + ", " + std::to_string(e.b) + ")"; }
+
+}  // namespace
+
+MeshBuildResult soup_to_mesh(const Soup& input, Mesh& mesh) {
+  mesh.clear();
+  MeshBuildResult r;
+  const Weld weld = weld_identical_points(input.points);
+  const Soup soup = weld.merged ? apply_weld(input, weld) : input;
+  const Topology t = analyze_topology(soup);
+  for (std::size_t f : t.repeated_index_faces) r.problems.push_back("face " + std::to_string(f) + " repeats a vertex");
+  for (const Edge& e : t.nonmanifold_edges)
+    r.problems.push_back(edge_name(e) + " is non-manifold: shared by " + std::to_string(e.uses.size()) +
+                         " faces (" + faces_of(e) + ")");
+  for (const Edge& e : t.misoriented_edges)
+    r.problems.push_back("faces " + faces_of(e) + " disagree in orientation across " + edge_name(e));
+  for (Index v : t.nonmanifold_vertices)
+    r.problems.push_back("vertex " + std::to_string(v) + " is non-manifold: its faces form more than one fan");
+  for (const auto& d : t.duplicate_faces)
+    r.problems.push_back("faces " + std::to_string(d[0]) + " and " + std::to_string(d[1]) + " are duplicates");
+  if (!r.problems.empty()) return r;
+
+  std::vector<vertex_descriptor> vmap(soup.points.size());
+  mesh.reserve(static_cast<Mesh::size_type>(soup.points.size()), 0, static_cast<Mesh::size_type>(soup.face_count()));
+  for (std::size_t i = 0; i < soup.points.size(); ++i)
+    if (weld.representative[i] == i) {
+      const Point3d& p = soup.points[i];
+      vmap[i] = mesh.add_vertex(Point(p[0], p[1], p[2]));
+    }
+  auto origin = mesh.add_property_map<face_descriptor, std::int64_t>(kFaceOrigin, -1).first;
+  std::vector<vertex_descriptor> corners;
+  for (std::size_t f = 0; f < soup.face_count(); ++f) {
+    corners.clear();
+    for (Index i : soup.face(f)) corners.push_back(vmap[i]);
+    const face_descriptor fd = mesh.add_face(corners);
+    if (fd == Mesh::null_face()) {  // defensive: the topology pass should have caught it
+      r.problems.push_back("face " + std::to_string(f) + " cannot be added to a 2-manifold mesh");
+      mesh.clear();
+      return r;
+    }
+    origin[fd] = static_cast<std::int64_t>(f);
+  }
+  r.ok = true;
+  return r;
+}
+
+Soup mesh_to_soup(const Mesh& mesh) {
+  Soup s;
+  std::unordered_map<std::uint32_t, Index> id;
+  for (vertex_descriptor v : mesh.vertices()) {
+    id[static_cast<std::uint32_t>(v)] = static_cast<Index>(s.points.size());
+    const Point& p = mesh.point(v);
+    s.points.push_back({CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())});
+  }
+  for (face_descriptor f : mesh.faces()) {
+    std::vector<Index> face;
+    for (vertex_descriptor v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) face.push_back(id[static_cast<std::uint32_t>(v)]);
+    s.add_face(face.begin(), face.end());
+  }
+  return s;
+}
+
+}  // namespace polyheal

@@ -1,0 +1,28 @@
+// polyheal — soup <-> Surface_mesh.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "polyheal/mesh/mesh.h"
+#include "polyheal/mesh/soup.h"
+
+namespace polyheal {
+
+/// Why a soup is not an oriented 2-manifold polygon mesh: one line per
+/// problem, naming the edge, vertex or faces at fault. Empty when it is.
+struct MeshBuildResult {
+  bool ok = false;
+  std::vector<std::string> problems;
+};
+
+/// Welds identical points, then builds `mesh` (cleared first) when the soup is
+/// a valid oriented 2-manifold polygon mesh; otherwise leaves it empty and
+/// lists every problem. Each face's input id goes to the kFaceOrigin property.
+MeshBuildResult soup_to_mesh(const Soup& soup, Mesh& mesh);
+
+/// The mesh as a soup, exact coordinates rounded to double (certify after
+/// rounding: check the result, not the mesh). Vertices are renumbered densely.
+Soup mesh_to_soup(const Mesh& mesh);
+
+}  // namespace polyheal

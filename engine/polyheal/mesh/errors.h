@@ -1,0 +1,39 @@
+// polyheal — error types shared by every layer.
+//
+// Bad input is one exception type carrying file, position and reason; the CLI
+// turns it into a one-line message and exit code 2. "Could not finish" is not
+// an exception: it is a status in a result struct.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace polyheal {
+
+/// Malformed or unreadable input. `position` is human readable ("line 12",
+/// "byte 84", "header"); empty when the whole file is at fault (missing file).
+class InputError : public std::runtime_error {
+ public:
+  InputError(std::string file, std::string position, std::string reason)
+      : std::runtime_error(compose(file, position, reason)),
+        file_(std::move(file)), position_(std::move(position)), reason_(std::move(reason)) {}
+
+  const std::string& file() const { return file_; }
+  const std::string& position() const { return position_; }
+  const std::string& reason() const { return reason_; }
+
+ private:
+  static std::string compose(const std::string& f, const std::string& p, const std::string& r) {
+    return p.empty() ? f + ": " + r : f + ":" + p + ": " + r;
+  }
+  std::string file_, position_, reason_;
+};
+
+/// Failure to write an output file (permissions, disk full, refusal to
+/// overwrite the input). The target file is left untouched.
+class OutputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace polyheal

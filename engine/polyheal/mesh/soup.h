@@ -1,0 +1,53 @@
+// polyheal — the polygon soup: what every reader returns.
+//
+// Points are the file's doubles, bit for bit. Faces are index lists stored
+// compactly (CSR): face f is indices[offsets[f] .. offsets[f+1]). No CGAL here,
+// so that I/O and the CLI compile fast.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace polyheal {
+
+using Point3d = std::array<double, 3>;
+using Index = std::uint32_t;
+
+/// A read-only view of one face's vertex indices.
+struct FaceView {
+  const Index* first;
+  const Index* last;
+  const Index* begin() const { return first; }
+  const Index* end() const { return last; }
+  std::size_t size() const { return static_cast<std::size_t>(last - first); }
+  Index operator[](std::size_t i) const { return first[i]; }
+};
+
+struct Soup {
+  std::vector<Point3d> points;
+  std::vector<Index> indices;             // all faces' vertex indices, concatenated
+  std::vector<std::size_t> offsets{0};    // size = face count + 1
+  std::vector<std::int32_t> face_group;   // empty, or one group id per face (-1: none)
+  std::vector<std::string> group_names;   // group id -> name (OBJ `g`)
+
+  std::size_t face_count() const { return offsets.size() - 1; }
+  FaceView face(std::size_t f) const {
+    return {indices.data() + offsets[f], indices.data() + offsets[f + 1]};
+  }
+  template <class It>
+  void add_face(It first, It last) {
+    indices.insert(indices.end(), first, last);
+    offsets.push_back(indices.size());
+  }
+  void add_triangle(Index a, Index b, Index c) {
+    indices.push_back(a);
+    indices.push_back(b);
+    indices.push_back(c);
+    offsets.push_back(indices.size());
+  }
+  bool is_triangle_soup() const { return indices.size() == 3 * face_count(); }
+};
+
+}  // namespace polyheal

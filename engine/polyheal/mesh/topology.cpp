@@ -1,0 +1,171 @@
+#include "polyheal/mesh/topology.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <numeric>
+
+namespace polyheal {
+namespace {
+
+struct UnionFind {
+  std::vector<std::size_t> parent;
+  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  std::size_t find(std::size_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(std::size_t a, std::size_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+}  // namespace
+
+Topology analyze_topology(const Soup& soup) {
+  Topology t;
+  const std::size_t nf = soup.face_count(), nv = soup.points.size(), nc = soup.indices.size();
+  std::vector<std::uint32_t> corner_face(nc);
+  for (std::size_t f = 0; f < nf; ++f)
+    for (std::size_t c = soup.offsets[f]; c < soup.offsets[f + 1]; ++c) corner_face[c] = static_cast<std::uint32_t>(f);
+  auto next = [&](std::size_t c) {
+    const std::size_t f = corner_face[c];
+    return c + 1 == soup.offsets[f + 1] ? soup.offsets[f] : c + 1;
+  };
+
+  // Faces with a repeated vertex index; their repeated edges are skipped below.
+  std::vector<char> used(nv, 0);
+  for (std::size_t f = 0; f < nf; ++f) {
+    FaceView v = soup.face(f);
+    bool repeated;
+    if (v.size() == 3) {
+      repeated = v[0] == v[1] || v[1] == v[2] || v[0] == v[2];
+    } else {
+      std::vector<Index> sorted(v.begin(), v.end());
+      std::sort(sorted.begin(), sorted.end());
+      repeated = std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end();
+    }
+    if (repeated) t.repeated_index_faces.push_back(f);
+    for (Index i : v) used[i] = 1;
+  }
+  t.isolated_vertices = static_cast<std::size_t>(std::count(used.begin(), used.end(), 0));
+
+  // Bucket halfedges (corners) by their smaller endpoint: linear, cache friendly.
+  std::vector<std::size_t> start(nv + 1, 0);
+  for (std::size_t c = 0; c < nc; ++c) {
+    Index u = soup.indices[c], w = soup.indices[next(c)];
+    if (u != w) ++start[std::min(u, w) + 1];
+  }
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<std::size_t> bucket(start[nv]);
+  {
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t c = 0; c < nc; ++c) {
+      Index u = soup.indices[c], w = soup.indices[next(c)];
+      if (u != w) bucket[fill[std::min(u, w)]++] = c;
+    }
+  }
+  auto other = [&](std::size_t c) { return std::max(soup.indices[c], soup.indices[next(c)]); };
+
+  UnionFind faces(nf), corners(nc), boundary(nv);
+  std::vector<char> on_boundary(nv, 0);
+  std::vector<std::size_t> around;  // corner of each face at a given vertex
+  for (Index a = 0; a < nv; ++a) {
+    auto first = bucket.begin() + static_cast<std::ptrdiff_t>(start[a]);
+    auto last = bucket.begin() + static_cast<std::ptrdiff_t>(start[a + 1]);
+    std::sort(first, last, [&](std::size_t x, std::size_t y) { return other(x) < other(y); });
+    for (auto run = first; run != last;) {
+      auto end = run;
+      while (end != last && other(*end) == other(*run)) ++end;
+      const Index b = other(*run);
+      const std::size_t n_uses = static_cast<std::size_t>(end - run);
+      ++t.edge_count;
+      for (auto it = run + 1; it != end; ++it) faces.unite(corner_face[*run], corner_face[*it]);
+      const std::size_t c0 = *run, n0 = next(c0);
+      if (n_uses == 2 && soup.indices[c0] != soup.indices[*(run + 1)]) {
+        // Two uses, opposite directions: glue the corners at both endpoints into one fan.
+        const std::size_t c1 = *(run + 1), n1 = next(c1);
+        corners.unite(c0, n1);
+        corners.unite(n0, c1);
+        t.interior_edges.push_back({a, b, corner_face[c0], corner_face[c1]});
+        run = end;
+        continue;
+      }
+      Edge e{a, b, {}};
+      for (auto it = run; it != end; ++it)
+        e.uses.push_back({corner_face[*it], soup.indices[*it], soup.indices[next(*it)]});
+      if (e.uses.size() == 1) {
+        boundary.unite(e.a, e.b);
+        on_boundary[e.a] = on_boundary[e.b] = 1;
+        t.boundary_edges.push_back(std::move(e));
+      } else if (e.uses.size() > 2) {
+        t.nonmanifold_edges.push_back(std::move(e));
+      } else {  // two uses in the same direction: one fan, inconsistently oriented
+        const std::size_t c1 = *(run + 1);
+        corners.unite(c0, c1);
+        corners.unite(n0, next(c1));
+        t.misoriented_edges.push_back(std::move(e));
+      }
+      run = end;
+    }
+  }
+
+  // A vertex is non-manifold when its corners form more than one fan.
+  std::vector<std::size_t> fan_root(nv, SIZE_MAX);
+  std::vector<char> flagged(nv, 0);
+  for (std::size_t c = 0; c < nc; ++c) {
+    const Index v = soup.indices[c];
+    const std::size_t r = corners.find(c);
+    if (fan_root[v] == SIZE_MAX) fan_root[v] = r;
+    else if (fan_root[v] != r && !flagged[v]) {
+      flagged[v] = 1;
+      t.nonmanifold_vertices.push_back(v);
+    }
+  }
+  std::sort(t.nonmanifold_vertices.begin(), t.nonmanifold_vertices.end());
+
+  for (Index v = 0; v < nv; ++v)
+    if (on_boundary[v] && boundary.find(v) == v) ++t.boundary_loops;
+  t.face_component.resize(nf);
+  std::vector<std::size_t> comp_id(nf, SIZE_MAX);
+  for (std::size_t f = 0; f < nf; ++f) {
+    const std::size_t r = faces.find(f);
+    if (comp_id[r] == SIZE_MAX) comp_id[r] = t.components++;
+    t.face_component[f] = comp_id[r];
+  }
+
+  // Duplicate faces: identical sorted vertex lists.
+  std::vector<std::size_t> order(nf);
+  std::iota(order.begin(), order.end(), 0);
+  auto key = [&](std::size_t f) {
+    FaceView v = soup.face(f);
+    std::vector<Index> k(v.begin(), v.end());
+    std::sort(k.begin(), k.end());
+    return k;
+  };
+  if (soup.is_triangle_soup()) {
+    std::vector<std::array<Index, 3>> keys(nf);
+    for (std::size_t f = 0; f < nf; ++f) {
+      FaceView v = soup.face(f);
+      keys[f] = {v[0], v[1], v[2]};
+      std::sort(keys[f].begin(), keys[f].end());
+    }
+    std::sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) {
+      return keys[x] != keys[y] ? keys[x] < keys[y] : x < y;
+    });
+    for (std::size_t i = 1; i < nf; ++i)
+      if (keys[order[i]] == keys[order[i - 1]]) t.duplicate_faces.push_back({order[i - 1], order[i]});
+  } else {
+    std::vector<std::vector<Index>> keys(nf);
+    for (std::size_t f = 0; f < nf; ++f) keys[f] = key(f);
+    std::sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) {
+      return keys[x] != keys[y] ? keys[x] < keys[y] : x < y;
+    });
+    for (std::size_t i = 1; i < nf; ++i)
+      if (keys[order[i]] == keys[order[i - 1]]) t.duplicate_faces.push_back({order[i - 1], order[i]});
+  }
+  return t;
+}
+
+}  // namespace polyheal

@@ -1,0 +1,51 @@
+// polyheal — combinatorial structure of a soup: edges, fans, components.
+//
+// Pure combinatorics on vertex indices (no geometry, no CGAL). Call it on a
+// welded soup (weld.h) so that faces share vertices by position. Used by the
+// oracle's report and by the soup-to-mesh conversion to say exactly why a soup
+// is not an oriented 2-manifold.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "polyheal/mesh/soup.h"
+
+namespace polyheal {
+
+/// A face corner: face f, position k in the face; `vertex` is its index.
+struct EdgeUse {
+  std::size_t face;
+  Index from, to;  // the edge as the face traverses it
+};
+
+struct Edge {
+  Index a, b;                  // a < b
+  std::vector<EdgeUse> uses;   // faces traversing this edge
+};
+
+struct Topology {
+  std::size_t edge_count = 0;
+  std::vector<Edge> boundary_edges;       // one use
+  std::vector<Edge> nonmanifold_edges;    // three or more uses
+  std::vector<Edge> misoriented_edges;    // two uses in the same direction
+  /// Exactly two uses in opposite directions (the good case; stored compactly).
+  struct InteriorEdge {
+    Index a, b;                 // a < b
+    std::uint32_t face0, face1;
+  };
+  std::vector<InteriorEdge> interior_edges;
+  std::vector<Index> nonmanifold_vertices;  // faces around it form more than one fan
+  std::size_t boundary_loops = 0;         // connected components of the boundary-edge graph
+  std::size_t components = 0;             // faces connected through shared edges
+  std::vector<std::size_t> face_component;
+  std::size_t isolated_vertices = 0;      // points used by no face
+  std::vector<std::array<std::size_t, 2>> duplicate_faces;  // same vertex set, (first, later)
+  std::vector<std::size_t> repeated_index_faces;            // a vertex index occurs twice
+};
+
+/// Analyses `soup` (indices as given: weld first for positional sharing).
+Topology analyze_topology(const Soup& soup);
+
+}  // namespace polyheal

@@ -1,0 +1,24 @@
+// polyheal — welding identical points.
+#pragma once
+
+#include <vector>
+
+#include "polyheal/mesh/soup.h"
+
+namespace polyheal {
+
+/// Maps each point to the smallest index of a point with the same value
+/// (x, y, z compared as doubles, so +0.0 and -0.0 weld; NaN never occurs
+/// because readers reject it). `representative[i] == i` for points kept.
+struct Weld {
+  std::vector<Index> representative;
+  std::size_t merged = 0;  // points that had an identical earlier twin
+};
+
+Weld weld_identical_points(const std::vector<Point3d>& points);
+
+/// The soup with every face index replaced by its representative. Points are
+/// kept (unreferenced twins stay as isolated points, so indices stay valid).
+Soup apply_weld(const Soup& soup, const Weld& weld);
+
+}  // namespace polyheal
