@@ -1,0 +1,187 @@
+// The exact oracle on hand-built configurations: intersection semantics,
+// topology, shape classes. Table-driven; each configuration is checked under
+// every cyclic rotation of both faces, both orientations and both face orders.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+
+#include "polyheal/inspect/report.h"
+#include "support/builders.h"
+
+using namespace polyheal;
+
+namespace {
+
+struct PairCase {
+  const char* what;
+  std::array<Point3d, 3> a, b;
+  std::size_t pairs;       // intersecting pairs expected
+  std::size_t degenerate;  // degenerate faces expected
+};
+
+/// Two triangles as a soup; corners at identical positions are welded by the
+/// oracle, so shared vertices come from shared coordinates.
+Soup two_triangles(const std::array<Point3d, 3>& a, const std::array<Point3d, 3>& b) {
+  Soup s;
+  for (const auto& p : a) s.points.push_back(p);
+  for (const auto& p : b) s.points.push_back(p);
+  s.add_triangle(0, 1, 2);
+  s.add_triangle(3, 4, 5);
+  return s;
+}
+
+std::array<Point3d, 3> rotate(std::array<Point3d, 3> t, int k) {
+  std::rotate(t.begin(), t.begin() + k, t.end());
+  return t;
+}
+std::array<Point3d, 3> flip(std::array<Point3d, 3> t) { return {t[0], t[2], t[1]}; }
+
+}  // namespace
+
+TEST_CASE("inspect: triangle pair semantics of PMP::self_intersections", "[inspect][smoke]") {
+  const std::vector<PairCase> cases = {
+      // Touch at a shared vertex only, in different planes.
+      {"vertex contact", {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}, {{{0, 0, 0}, {-1, 0, 1}, {0, -1, 1}}}, 0, 0},
+      // Share an edge and lie flat side by side.
+      {"flat across an edge", {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}, {{{1, 0, 0}, {0, 0, 0}, {0, -1, 0}}}, 0, 0},
+      // Share an edge and fold onto each other (coplanar, same side).
+      {"folded across an edge", {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}, {{{1, 0, 0}, {0, 0, 0}, {0.5, 2, 0}}}, 1, 0},
+      // Share an edge at a 90 degree dihedral angle.
+      {"edge, right angle", {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}, {{{1, 0, 0}, {0, 0, 0}, {0, 0, 1}}}, 0, 0},
+      // No shared vertex, one pierces the other.
+      {"crossing", {{{0, 0, 0}, {2, 0, 0}, {0, 2, 0}}}, {{{0.5, 0.5, -1}, {0.5, 0.5, 1}, {3, 3, 0.5}}}, 1, 0},
+      // No shared vertex, coplanar and partly overlapping.
+      {"coplanar overlap", {{{0, 0, 0}, {2, 0, 0}, {0, 2, 0}}}, {{{1, 1, 0}, {-1, 1, 0}, {1, -1, 0}}}, 1, 0},
+      // Coplanar, one strictly inside the other.
+      {"one inside the other", {{{0, 0, 0}, {4, 0, 0}, {0, 4, 0}}}, {{{1, 1, 0}, {2, 1, 0}, {1, 2, 0}}}, 1, 0},
+      // Disjoint, parallel planes.
+      {"parallel apart", {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}, {{{0, 0, 1}, {1, 0, 1}, {0, 1, 1}}}, 0, 0},
+      // A zero-area triangle (collinear corners) lying inside another face.
+      {"sliver inside a face", {{{0, 0, 0}, {4, 0, 0}, {0, 4, 0}}}, {{{1, 1, 0}, {2, 1, 0}, {3, 1, 0}}}, 1, 1},
+      // A zero-area triangle next to a face, not touching it.
+      {"sliver beside a face", {{{0, 0, 0}, {4, 0, 0}, {0, 4, 0}}}, {{{1, 1, 1}, {2, 1, 1}, {3, 1, 1}}}, 0, 1},
+      // Shared vertex, and the opposite edge of one pierces the other.
+      {"vertex + piercing edge", {{{0, 0, 0}, {2, 0, 0}, {0, 2, 0}}}, {{{0, 0, 0}, {1, 0.2, -1}, {0.2, 1, 1}}}, 1, 0},
+      // Shared vertex, coplanar, overlapping wedges.
+      {"vertex + coplanar overlap", {{{0, 0, 0}, {2, 0, 0}, {0, 2, 0}}}, {{{0, 0, 0}, {2, 1, 0}, {1, 2, 0}}}, 1, 0},
+      // Shared vertex, coplanar, wedges apart.
+      {"vertex + coplanar apart", {{{0, 0, 0}, {2, 0, 0}, {2, 1, 0}}}, {{{0, 0, 0}, {1, 2, 0}, {0, 2, 0}}}, 0, 0},
+      // Touching at a point that is a vertex of one and interior to an edge of the other.
+      {"vertex on an edge", {{{0, 0, 0}, {2, 0, 0}, {0, 2, 0}}}, {{{1, 0, 0}, {1, -1, 1}, {1, -1, -1}}}, 1, 0},
+      // Same three corners: a duplicate face.
+      {"duplicate", {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}, {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}, 1, 0},
+  };
+  for (const PairCase& c : cases)
+    for (int ka = 0; ka < 3; ++ka)
+      for (int kb = 0; kb < 3; ++kb)
+        for (int flips = 0; flips < 4; ++flips)
+          for (bool swap : {false, true}) {
+            auto a = rotate(c.a, ka), b = rotate(c.b, kb);
+            if (flips & 1) a = flip(a);
+            if (flips & 2) b = flip(b);
+            const Soup s = swap ? two_triangles(b, a) : two_triangles(a, b);
+            const Report r = inspect(s);
+            INFO(c.what << " rotations " << ka << "," << kb << " flips " << flips << " swapped " << swap);
+            CHECK(r.self_intersections.size() == c.pairs);
+            CHECK(r.degenerate_faces.size() == c.degenerate);
+          }
+}
+
+TEST_CASE("inspect: a closed tetrahedron is certified clean", "[inspect][smoke]") {
+  const Report r = inspect(test::tetrahedron());
+  CHECK(r.certified_clean());
+  CHECK(r.tetgen_ready());
+  CHECK(r.components == 1);
+  CHECK(r.boundary_edges.empty());
+  CHECK(r.signed_volume == Approx(1.0 / 6));
+}
+
+TEST_CASE("inspect: topology defects", "[inspect]") {
+  SECTION("a tetrahedron with one face flipped") {
+    Soup s = test::tetrahedron();
+    std::swap(s.indices[1], s.indices[2]);
+    const Report r = inspect(s);
+    CHECK(r.misoriented_edges.size() == 3);
+    CHECK_FALSE(r.oriented);
+    CHECK(r.closed);
+    CHECK(r.self_intersections.empty());
+    CHECK_FALSE(r.certified_clean());
+  }
+  SECTION("a non-manifold edge of three faces") {
+    const Soup s = test::soup({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}},
+                              {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}});
+    const Report r = inspect(s);
+    REQUIRE(r.nonmanifold_edges.size() == 1);
+    CHECK(r.nonmanifold_edges[0].faces.size() == 3);
+    CHECK_FALSE(r.manifold);
+  }
+  SECTION("an open tetrahedron: one boundary loop of three edges") {
+    Soup s = test::tetrahedron();
+    s.indices.resize(9);
+    s.offsets.resize(4);
+    const Report r = inspect(s);
+    CHECK(r.boundary_edges.size() == 3);
+    CHECK(r.boundary_loops == 1);
+    CHECK_FALSE(r.closed);
+  }
+  SECTION("two tetrahedra, unwelded copies of each point, an isolated point") {
+    Soup s = test::concat(test::tetrahedron(), test::tetrahedron(3, 0, 0));
+    s.points.push_back({9, 9, 9});
+    s.points.push_back(s.points[0]);  // an identical twin of a used point
+    const Report r = inspect(s);
+    CHECK(r.components == 2);
+    CHECK(r.isolated_vertices == 1);
+    CHECK(r.merged_identical_vertices == 1);
+    CHECK(r.certified_clean());
+  }
+  SECTION("a duplicated face") {
+    Soup s = test::tetrahedron();
+    s.add_triangle(1, 2, 3);
+    const Report r = inspect(s);
+    CHECK(r.duplicate_faces.size() == 1);
+    CHECK(r.nonmanifold_edges.size() == 3);
+    CHECK_FALSE(r.certified_clean());
+  }
+}
+
+TEST_CASE("inspect: caps, needles and degenerate faces decided exactly", "[inspect]") {
+  struct Row {
+    const char* what;
+    std::array<Point3d, 3> t;
+    std::size_t degenerate, caps, needles;
+  };
+  // Apex angle of an isosceles triangle (0,0,0)-(2,0,0)-(1,h,0) is 2*atan(1/h).
+  const double h176 = std::tan((90.0 - 88.0) * 3.14159265358979323846 / 180.0);  // apex 176 deg
+  const double h174 = std::tan((90.0 - 87.0) * 3.14159265358979323846 / 180.0);  // apex 174 deg
+  const std::vector<Row> rows = {
+      {"exactly collinear", {{{0, 0, 0}, {1, 1, 1}, {3, 3, 3}}}, 1, 0, 0},
+      {"repeated corner", {{{0, 0, 0}, {1, 0, 0}, {0, 0, 0}}}, 1, 0, 0},
+      {"tiny but not collinear", {{{0, 0, 0}, {1, 0, 0}, {0.5, 1e-300, 0}}}, 0, 1, 0},
+      {"cap at 176 degrees", {{{0, 0, 0}, {2, 0, 0}, {1, h176, 0}}}, 0, 1, 0},
+      {"not a cap at 174 degrees", {{{0, 0, 0}, {2, 0, 0}, {1, h174, 0}}}, 0, 0, 1},  // base angles 3 deg
+      {"needle at 4 degrees", {{{0, 0, 0}, {1, 0, 0}, {0, 0.0699, 0}}}, 0, 0, 1},
+      {"fine right triangle", {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}, 0, 0, 0},
+  };
+  for (const Row& row : rows) {
+    INFO(row.what);
+    Soup s;
+    s.points.assign(row.t.begin(), row.t.end());
+    s.add_triangle(0, 1, 2);
+    const Report r = inspect(s);
+    CHECK(r.degenerate_faces.size() == row.degenerate);
+    CHECK(r.caps.size() == row.caps);
+    CHECK(r.needles.size() == row.needles);
+  }
+}
+
+TEST_CASE("inspect: TetGen's tolerances are reported apart from exact defects", "[inspect]") {
+  // Two faces sharing an edge, folded to 0.05 degrees but not coplanar.
+  const double t = std::tan(0.05 * 3.14159265358979323846 / 180.0);
+  const Soup s = test::soup({{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, 1, t}}, {{0, 1, 2}, {1, 0, 3}});
+  const Report r = inspect(s);
+  CHECK(r.self_intersections.empty());
+  CHECK(r.sharp_folds.size() == 1);
+  InspectOptions wide;
+  wide.tetgen_fold_angle = 0.01;
+  CHECK(inspect(s, wide).sharp_folds.empty());
+}

@@ -1,0 +1,66 @@
+// Soup -> Surface_mesh: builds valid oriented 2-manifolds, explains the rest.
+#include <catch2/catch.hpp>
+
+#include "polyheal/io/read.h"
+#include "polyheal/mesh/convert.h"
+#include "support/builders.h"
+
+using namespace polyheal;
+
+namespace {
+bool mentions(const MeshBuildResult& r, const std::string& what) {
+  for (const std::string& p : r.problems)
+    if (p.find(what) != std::string::npos) return true;
+  return false;
+}
+}  // namespace
+
+TEST_CASE("convert: a closed tetrahedron becomes a valid mesh with provenance", "[mesh][smoke]") {
+  Mesh m;
+  const MeshBuildResult r = soup_to_mesh(test::tetrahedron(), m);
+  REQUIRE(r.ok);
+  CHECK(m.number_of_faces() == 4);
+  CHECK(m.is_valid(false));
+  auto origin = m.property_map<face_descriptor, std::int64_t>(kFaceOrigin).first;
+  std::int64_t sum = 0;
+  for (face_descriptor f : m.faces()) sum += origin[f];
+  CHECK(sum == 0 + 1 + 2 + 3);
+  CHECK(mesh_to_soup(m).points == test::tetrahedron().points);
+}
+
+TEST_CASE("convert: says exactly why a soup is not an oriented 2-manifold", "[mesh]") {
+  Mesh m;
+  SECTION("a flipped face") {
+    Soup s = test::tetrahedron();
+    std::swap(s.indices[1], s.indices[2]);
+    const MeshBuildResult r = soup_to_mesh(s, m);
+    CHECK_FALSE(r.ok);
+    CHECK(mentions(r, "disagree in orientation"));
+  }
+  SECTION("an edge of three faces") {
+    const Soup s = test::soup({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}},
+                              {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}});
+    const MeshBuildResult r = soup_to_mesh(s, m);
+    CHECK_FALSE(r.ok);
+    CHECK(mentions(r, "edge (0, 1) is non-manifold: shared by 3 faces (0, 1, 2)"));
+  }
+  SECTION("two tetrahedra touching at one vertex") {
+    // The tetrahedron and its point reflection through the shared corner (0,0,0).
+    const Soup s = test::soup({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}},
+                              {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3},
+                               {0, 4, 5}, {0, 6, 4}, {0, 5, 6}, {4, 6, 5}});
+    const MeshBuildResult r = soup_to_mesh(s, m);
+    CHECK_FALSE(r.ok);
+    CHECK(mentions(r, "vertex 0 is non-manifold"));
+  }
+  CHECK(m.number_of_faces() == 0);
+}
+
+TEST_CASE("convert: every manifold fixture builds", "[mesh][corpus]") {
+  for (const char* f : {"tube_edge2.42.off", "tube_edge3.0.off", "torus_knot_20k.off", "cad_cylinder.off"}) {
+    INFO(f);
+    Mesh m;
+    CHECK(soup_to_mesh(read_soup(test::fixture(f)), m).ok);
+    CHECK(m.is_valid(false));
+  }
+}

@@ -1,0 +1,47 @@
+#include "support/builders.h"
+
+#include <filesystem>
+#include <fstream>
+
+namespace polyheal::test {
+
+Soup soup(std::initializer_list<Point3d> points, std::initializer_list<std::array<Index, 3>> faces) {
+  Soup s;
+  s.points.assign(points.begin(), points.end());
+  for (const auto& f : faces) s.add_triangle(f[0], f[1], f[2]);
+  return s;
+}
+
+Soup tetrahedron(double dx, double dy, double dz) {
+  return soup({{dx, dy, dz}, {dx + 1, dy, dz}, {dx, dy + 1, dz}, {dx, dy, dz + 1}},
+              {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+}
+
+Soup concat(const Soup& a, const Soup& b) {
+  Soup s = a;
+  const Index shift = static_cast<Index>(a.points.size());
+  s.points.insert(s.points.end(), b.points.begin(), b.points.end());
+  for (std::size_t f = 0; f < b.face_count(); ++f) {
+    std::vector<Index> v(b.face(f).begin(), b.face(f).end());
+    for (Index& i : v) i += shift;
+    s.add_face(v.begin(), v.end());
+  }
+  return s;
+}
+
+std::string fixture(const std::string& name) { return std::string(POLYHEAL_SOURCE_DIR) + "/fixtures/" + name; }
+
+std::string scratch(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::path(POLYHEAL_BINARY_DIR) / "test-scratch";
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path p = dir / name;
+  std::filesystem::remove_all(p);
+  return p.string();
+}
+
+void write_bytes(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+}  // namespace polyheal::test

@@ -1,0 +1,27 @@
+// Test support: tiny soups built in code, fixture paths, scratch files.
+#pragma once
+
+#include <initializer_list>
+#include <string>
+#include <vector>
+
+#include "polyheal/inspect/report.h"
+#include "polyheal/mesh/soup.h"
+
+namespace polyheal::test {
+
+/// A triangle soup from explicit points and faces.
+Soup soup(std::initializer_list<Point3d> points, std::initializer_list<std::array<Index, 3>> faces);
+/// A closed, outward-oriented tetrahedron with corners (0,0,0), (1,0,0), (0,1,0), (0,0,1), shifted.
+Soup tetrahedron(double dx = 0, double dy = 0, double dz = 0);
+/// Concatenates soups (indices shifted; points not shared).
+Soup concat(const Soup& a, const Soup& b);
+
+std::string fixture(const std::string& name);   // path under fixtures/
+std::string scratch(const std::string& name);   // a fresh path in the build tree
+void write_bytes(const std::string& path, const std::string& bytes);
+
+}  // namespace polyheal::test
+
+/// Every repair test ends with this: the soup is a certified clean solid.
+#define CHECK_CERTIFIED(soup_expr) CHECK(::polyheal::inspect(soup_expr).certified_clean())
