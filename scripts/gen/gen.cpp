@@ -121,9 +121,16 @@ void flip_if_inside_out(Soup& s) {
   for (std::size_t f = 0; f < s.face_count(); ++f) std::swap(s.indices[s.offsets[f] + 1], s.indices[s.offsets[f] + 2]);
 }
 
-/// A tube of radius rho around the (2,3) torus knot, about `faces` triangles.
+/// A tube of radius rho around the (2,3) torus knot, about `faces` triangles,
+/// with ring spacing close to the segment length (well-shaped triangles).
 Soup torus_knot(std::size_t faces, double rho) {
-  const int m = faces >= 200000 ? 16 : 12;
+  double length = 0;  // of the centre curve
+  for (int i = 0; i < 100000; ++i) {
+    const double t = 2 * kPi * i / 100000, r = 2 + std::cos(3 * t), dr = -3 * std::sin(3 * t);
+    length += std::sqrt(dr * dr + 4 * r * r + 9 * std::cos(3 * t) * std::cos(3 * t)) * 2 * kPi / 100000;
+  }
+  const double ratio = length / (2 * kPi * rho);  // rings per segment for square cells
+  const int m = std::max(8, static_cast<int>(std::lround(std::sqrt(faces / (2 * ratio)))));
   const int n = std::max<int>(16, static_cast<int>(faces / (2 * m)));
   Soup s;
   for (int i = 0; i < n; ++i) {

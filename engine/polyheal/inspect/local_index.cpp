@@ -112,7 +112,7 @@ struct LocalIndex::Impl {
     }
     std::vector<Tri> t;
     for (std::size_t k = 1; k + 1 < p.size(); ++k)
-      t.push_back(Tri{{*p[0], *p[k], *p[k + 1]}, {id[0], id[k], id[k + 1]}});
+      t.push_back(detail::make_tri<Kernel>(*p[0], *p[k], *p[k + 1], id[0], id[k], id[k + 1]));
     return t;
   }
 

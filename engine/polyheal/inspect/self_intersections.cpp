@@ -5,6 +5,7 @@
 
 #include <CGAL/box_intersection_d.h>
 #include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 
 #include "polyheal/inspect/detail/triangle_pair.h"
 
@@ -12,6 +13,10 @@ namespace polyheal {
 namespace {
 
 using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::uint32_t, CGAL::Box_intersection_d::ID_EXPLICIT>;
+// As in PMP::self_intersections: below this many boxes the segment tree scans
+// (much faster than the default 10 on surface meshes).
+constexpr std::ptrdiff_t kCutoff = 2000;
+using Traits = CGAL::Box_intersection_d::Box_traits_d<const Box*>;
 using Tri = detail::Tri<InputKernel>;
 
 /// A triangle of the (fan-triangulated) soup and the face it came from.
@@ -30,14 +35,25 @@ std::vector<FanTriangle> fan_triangles(const Soup& s) {
   return t;
 }
 
-Tri make_tri(const Soup& s, const FanTriangle& t) {
-  Tri r;
-  for (int k = 0; k < 3; ++k) {
-    const Point3d& p = s.points[t.v[k]];
-    r.p[k] = InputKernel::Point_3(p[0], p[1], p[2]);
-    r.id[k] = t.v[k];
-  }
-  return r;
+InputKernel::Point_3 point(const Soup& s, Index i) {
+  const Point3d& p = s.points[i];
+  return {p[0], p[1], p[2]};
+}
+
+/// The exact triangles, with degeneracy decided once per triangle (in parallel).
+std::vector<Tri> exact_triangles(const Soup& s, const std::vector<FanTriangle>& tris, bool parallel) {
+  std::vector<Tri> out(tris.size());
+  auto build = [&](std::size_t i) {
+    const FanTriangle& t = tris[i];
+    out[i] = detail::make_tri<InputKernel>(point(s, t.v[0]), point(s, t.v[1]), point(s, t.v[2]), t.v[0], t.v[1], t.v[2]);
+  };
+  if (parallel)
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tris.size(), 8192), [&](const auto& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) build(i);
+    });
+  else
+    for (std::size_t i = 0; i < tris.size(); ++i) build(i);
+  return out;
 }
 
 /// Runs the broad phase and calls `found(a, b)` for each intersecting pair of
@@ -45,6 +61,7 @@ Tri make_tri(const Soup& s, const FanTriangle& t) {
 template <class Found>
 void scan(const Soup& s, const std::vector<FanTriangle>& tris, const SelfIntersectionOptions& o, Found found,
           const std::atomic<bool>& stop) {
+  const std::vector<Tri> exact = exact_triangles(s, tris, o.parallel);
   std::vector<Box> boxes;
   boxes.reserve(tris.size());
   for (std::size_t i = 0; i < tris.size(); ++i) {
@@ -56,16 +73,22 @@ void scan(const Soup& s, const std::vector<FanTriangle>& tris, const SelfInterse
     boxes.emplace_back(b, static_cast<std::uint32_t>(i));
   }
   if (o.observer) o.observer->stage("self-intersections");
-  auto callback = [&](const Box& x, const Box& y) {
+  // The algorithm copies and reorders its input: give it pointers, not boxes.
+  std::vector<const Box*> pointers(boxes.size());
+  for (std::size_t i = 0; i < boxes.size(); ++i) pointers[i] = &boxes[i];
+  auto callback = [&](const Box* px, const Box* py) {
+    const Box &x = *px, &y = *py;
     if (stop.load(std::memory_order_relaxed)) return;
     const FanTriangle &a = tris[x.info()], &b = tris[y.info()];
     if (a.face == b.face) return;  // two fan triangles of one polygon
-    if (detail::faces_intersect<InputKernel>(make_tri(s, a), make_tri(s, b))) found(a.face, b.face);
+    if (detail::faces_intersect<InputKernel>(exact[x.info()], exact[y.info()])) found(a.face, b.face);
   };
   if (o.parallel)
-    CGAL::box_self_intersection_d<CGAL::Parallel_if_available_tag>(boxes.begin(), boxes.end(), callback);
+    CGAL::box_self_intersection_d<CGAL::Parallel_if_available_tag>(pointers.begin(), pointers.end(), callback,
+                                                                   Traits(), kCutoff);
   else
-    CGAL::box_self_intersection_d<CGAL::Sequential_tag>(boxes.begin(), boxes.end(), callback);
+    CGAL::box_self_intersection_d<CGAL::Sequential_tag>(pointers.begin(), pointers.end(), callback, Traits(),
+                                                        kCutoff);
 }
 
 }  // namespace

@@ -36,6 +36,15 @@ bool primitives_intersect(const Primitive<K>& x, const Primitive<K>& y) {
       x, y);
 }
 
+/// Segment pq against non-degenerate triangle t. Most pairs of neighbours
+/// are rejected by the first test: p and q strictly on one side of t's plane.
+template <class K>
+bool edge_meets_triangle(const typename K::Point_3& p, const typename K::Point_3& q, const Tri<K>& t) {
+  const CGAL::Orientation op = CGAL::orientation(t.p[0], t.p[1], t.p[2], p);
+  if (op != CGAL::COPLANAR && op == CGAL::orientation(t.p[0], t.p[1], t.p[2], q)) return false;
+  return CGAL::do_intersect(typename K::Segment_3(p, q), typename K::Triangle_3(t.p[0], t.p[1], t.p[2]));
+}
+
 }  // namespace
 
 template <class K>
@@ -49,23 +58,18 @@ bool faces_intersect(const Tri<K>& a, const Tri<K>& b) {
         ++shared;
         break;
       }
-  const bool a_degenerate = CGAL::collinear(a.p[0], a.p[1], a.p[2]);
-  const bool b_degenerate = CGAL::collinear(b.p[0], b.p[1], b.p[2]);
-  if (a_degenerate || b_degenerate) {
+  if (a.degenerate || b.degenerate) {
     if (shared > 0) return false;  // see the header: reported as degenerate instead
     return primitives_intersect<K>(primitive(a), primitive(b));
   }
-  using Segment = typename K::Segment_3;
   using Triangle = typename K::Triangle_3;
   switch (shared) {
     case 0:
       return CGAL::do_intersect(Triangle(a.p[0], a.p[1], a.p[2]), Triangle(b.p[0], b.p[1], b.p[2]));
     case 1: {
       const int i = ia[0], j = ib[0];
-      const Segment opposite_a(a.p[(i + 1) % 3], a.p[(i + 2) % 3]);
-      const Segment opposite_b(b.p[(j + 1) % 3], b.p[(j + 2) % 3]);
-      return CGAL::do_intersect(opposite_a, Triangle(b.p[0], b.p[1], b.p[2])) ||
-             CGAL::do_intersect(opposite_b, Triangle(a.p[0], a.p[1], a.p[2]));
+      return edge_meets_triangle<K>(a.p[(i + 1) % 3], a.p[(i + 2) % 3], b) ||
+             edge_meets_triangle<K>(b.p[(j + 1) % 3], b.p[(j + 2) % 3], a);
     }
     case 2: {
       const auto& p = a.p[ia[0]];

@@ -34,7 +34,15 @@ template <class K>
 struct Tri {
   std::array<typename K::Point_3, 3> p;
   std::array<std::uint64_t, 3> id;
+  bool degenerate;  // CGAL::collinear(p[0], p[1], p[2]), computed once per face by the caller
 };
+
+/// Tri with its degeneracy flag computed.
+template <class K>
+Tri<K> make_tri(const typename K::Point_3& a, const typename K::Point_3& b, const typename K::Point_3& c,
+                std::uint64_t ia, std::uint64_t ib, std::uint64_t ic) {
+  return Tri<K>{{a, b, c}, {ia, ib, ic}, CGAL::collinear(a, b, c)};
+}
 
 /// Exact; instantiated for InputKernel (Epick, on file doubles) and Kernel (Epeck).
 template <class K>
