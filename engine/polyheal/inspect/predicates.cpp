@@ -4,6 +4,9 @@
 #include <CGAL/Exact_rational.h>
 #include <CGAL/Interval_nt.h>
 
+#include <algorithm>
+#include <cmath>
+
 namespace polyheal {
 namespace {
 
@@ -11,7 +14,7 @@ using Interval = CGAL::Interval_nt<false>;
 using Rational = CGAL::Exact_rational;
 
 /// Runs `eval<NT>()` with intervals and, if any comparison is uncertain,
-/// again with exact rationals.
+/// again with exact rationals. (Callers try a static double filter first.)
 template <class Eval>
 bool filtered(Eval eval) {
   {
@@ -58,6 +61,53 @@ bool vector_angle_less(const Vec<NT>& u, const Vec<NT>& v, double c) {
   return bool(d >= 0) || bool(d * d < rhs);
 }
 
+/// Static filter for the angle tests, in plain double arithmetic.
+///
+/// For u = b - a, v = c - a (a, b, c doubles), the tests compare
+/// T = (u.v)^2 - c^2 (u.u)(v.v) with 0 and u.v with 0. Each difference carries
+/// a relative error <= eps, each dot product of three terms <= 3 eps more, so
+/// |T~ - T| <= 16 eps (D^2 + R) with D = sum |u_i v_i| and R = c^2 (u.u)(v.v),
+/// and |(u.v)~ - u.v| <= 6 eps D (eps = 2^-53; second-order terms included in
+/// the margin below). We use 1e-13 (> 500 eps) and refuse to decide when the
+/// magnitudes leave [1e-70, 1e70] or the sum falls near the underflow range,
+/// where the relative bounds do not hold; the caller then evaluates exactly.
+struct StaticAngle {
+  bool decided = false;
+  int dot_sign = 0;   // sign of u.v
+  int test_sign = 0;  // sign of (u.v)^2 - c^2 (u.u)(v.v)
+};
+
+StaticAngle static_angle(const Point3d& apex, const Point3d& b, const Point3d& c, double cos_threshold) {
+  StaticAngle r;
+  double u[3], v[3], m = 0;
+  for (int i = 0; i < 3; ++i) {
+    u[i] = b[i] - apex[i];
+    v[i] = c[i] - apex[i];
+    m = std::max({m, std::fabs(u[i]), std::fabs(v[i])});
+  }
+  if (!(m > 1e-70 && m < 1e70)) return r;
+  const double d = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+  const double D = std::fabs(u[0] * v[0]) + std::fabs(u[1] * v[1]) + std::fabs(u[2] * v[2]);
+  const double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+  const double R = cos_threshold * cos_threshold * uu * vv;
+  const double scale = D * D + R;
+  if (!(scale > 1e-250)) return r;
+  const double T = d * d - R;
+  if (std::fabs(T) <= 1e-13 * scale || std::fabs(d) <= 1e-13 * D) return r;
+  r.decided = true;
+  r.dot_sign = d > 0 ? 1 : -1;
+  r.test_sign = T > 0 ? 1 : -1;
+  return r;
+}
+
+/// The angle decisions from the signs of u.v and T (see vector_angle_*).
+bool greater_from_signs(int dot, int test, double c) {
+  return c >= 0 ? (dot < 0 || test < 0) : (dot < 0 && test > 0);
+}
+bool less_from_signs(int dot, int test, double c) {
+  return c >= 0 ? (dot > 0 && test > 0) : (dot >= 0 || test < 0);
+}
+
 }  // namespace
 
 bool is_collinear(const Point3d& a, const Point3d& b, const Point3d& c) {
@@ -66,6 +116,8 @@ bool is_collinear(const Point3d& a, const Point3d& b, const Point3d& c) {
 }
 
 bool angle_greater(const Point3d& apex, const Point3d& b, const Point3d& c, double cos_threshold) {
+  const StaticAngle s = static_angle(apex, b, c, cos_threshold);
+  if (s.decided) return greater_from_signs(s.dot_sign, s.test_sign, cos_threshold);
   return filtered([&](auto nt) {
     using NT = decltype(nt);
     return vector_angle_greater(sub<NT>(b, apex), sub<NT>(c, apex), cos_threshold);
@@ -73,6 +125,8 @@ bool angle_greater(const Point3d& apex, const Point3d& b, const Point3d& c, doub
 }
 
 bool angle_less(const Point3d& apex, const Point3d& b, const Point3d& c, double cos_threshold) {
+  const StaticAngle s = static_angle(apex, b, c, cos_threshold);
+  if (s.decided) return less_from_signs(s.dot_sign, s.test_sign, cos_threshold);
   return filtered([&](auto nt) {
     using NT = decltype(nt);
     return vector_angle_less(sub<NT>(b, apex), sub<NT>(c, apex), cos_threshold);
@@ -90,6 +144,25 @@ bool fold_angle_less(const Point3d& p, const Point3d& q, const Point3d& r, const
 }
 
 bool is_nearly_degenerate(const Point3d& a, const Point3d& b, const Point3d& c, double eps) {
+  // Quick reject in doubles: each component of ab x ac is off by at most
+  // ~8 eps_mach |ab||ac| <= 1e-14 L^2 (L the longest edge), so a computed
+  // |n|^2 above 4 eps^2 L^4 proves |n| > eps L^2 whenever eps >= 1e-12.
+  if (eps >= 1e-12) {
+    double u[3], v[3], w[3], m = 0;
+    for (int i = 0; i < 3; ++i) {
+      u[i] = b[i] - a[i];
+      v[i] = c[i] - a[i];
+      w[i] = c[i] - b[i];
+      m = std::max({m, std::fabs(u[i]), std::fabs(v[i])});
+    }
+    if (m > 1e-70 && m < 1e70) {
+      const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+      const double n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+      const double l2 = 1.01 * std::max({u[0] * u[0] + u[1] * u[1] + u[2] * u[2], v[0] * v[0] + v[1] * v[1] + v[2] * v[2],
+                                         w[0] * w[0] + w[1] * w[1] + w[2] * w[2]});
+      if (n2 > 4 * eps * eps * l2 * l2) return false;
+    }
+  }
   if (is_collinear(a, b, c)) return false;
   return filtered([&](auto nt) {
     using NT = decltype(nt);

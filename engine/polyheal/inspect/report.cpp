@@ -107,20 +107,32 @@ Report inspect(const Soup& input, const InspectOptions& o) {
 
   // TetGen: adjacent triangles folded onto each other below its angle bound.
   const double cos_fold = std::cos(o.tetgen_fold_angle * kPi / 180.0);
-  for (const Topology::InteriorEdge& e : topo.interior_edges) {
+  auto sharp_fold = [&](const Topology::InteriorEdge& e) {
     FaceView f0 = soup.face(e.face0), f1 = soup.face(e.face1);
-    if (f0.size() != 3 || f1.size() != 3 || shape[e.face0] == Shape::degenerate ||
-        shape[e.face1] == Shape::degenerate)
-      continue;
+    if (f0.size() != 3 || f1.size() != 3 || shape[e.face0] == Shape::degenerate || shape[e.face1] == Shape::degenerate)
+      return false;
     auto opposite = [&](FaceView v) {
       for (Index i : v)
         if (i != e.a && i != e.b) return i;
       return v[0];
     };
-    const Point3d &p = soup.points[e.a], &q = soup.points[e.b];
-    if (fold_angle_less(p, q, soup.points[opposite(f0)], soup.points[opposite(f1)], cos_fold))
-      r.sharp_folds.push_back({std::min<std::size_t>(e.face0, e.face1), std::max<std::size_t>(e.face0, e.face1)});
-  }
+    return fold_angle_less(soup.points[e.a], soup.points[e.b], soup.points[opposite(f0)], soup.points[opposite(f1)],
+                           cos_fold);
+  };
+  tbb::enumerable_thread_specific<std::vector<FacePair>> folds;
+  auto fold_range = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i != end; ++i) {
+      const Topology::InteriorEdge& e = topo.interior_edges[i];
+      if (sharp_fold(e))
+        folds.local().push_back({std::min<std::size_t>(e.face0, e.face1), std::max<std::size_t>(e.face0, e.face1)});
+    }
+  };
+  if (o.parallel)
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.interior_edges.size(), 8192),
+                      [&](const auto& range) { fold_range(range.begin(), range.end()); });
+  else
+    fold_range(0, topo.interior_edges.size());
+  for (const auto& v : folds) r.sharp_folds.insert(r.sharp_folds.end(), v.begin(), v.end());
   std::sort(r.sharp_folds.begin(), r.sharp_folds.end());
 
   // Bounding box and signed volume (a measurement, not a predicate).

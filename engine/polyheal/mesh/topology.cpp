@@ -68,6 +68,22 @@ Topology analyze_topology(const Soup& soup) {
   }
   auto other = [&](std::size_t c) { return std::max(soup.indices[c], soup.indices[next(c)]); };
 
+  // Duplicate triangles share every edge: find them on the edge (a, b) formed
+  // by their two smallest vertices, grouping uses by the third vertex.
+  std::vector<std::pair<Index, std::size_t>> thirds;
+  auto find_duplicate_triangles = [&](auto first, auto last, Index b) {
+    thirds.clear();
+    for (auto it = first; it != last; ++it) {
+      const std::size_t f = corner_face[*it];
+      if (soup.offsets[f + 1] - soup.offsets[f] != 3) continue;
+      const Index c = soup.indices[next(next(*it))];
+      if (c > b) thirds.push_back({c, f});
+    }
+    if (thirds.size() < 2) return;
+    std::sort(thirds.begin(), thirds.end());
+    for (std::size_t k = 1; k < thirds.size(); ++k)
+      if (thirds[k].first == thirds[k - 1].first) t.duplicate_faces.push_back({thirds[k - 1].second, thirds[k].second});
+  };
   UnionFind faces(nf), corners(nc), boundary(nv);
   std::vector<char> on_boundary(nv, 0);
   std::vector<std::size_t> around;  // corner of each face at a given vertex
@@ -80,6 +96,7 @@ Topology analyze_topology(const Soup& soup) {
       while (end != last && other(*end) == other(*run)) ++end;
       const Index b = other(*run);
       const std::size_t n_uses = static_cast<std::size_t>(end - run);
+      if (n_uses >= 2) find_duplicate_triangles(run, end, b);
       ++t.edge_count;
       for (auto it = run + 1; it != end; ++it) faces.unite(corner_face[*run], corner_face[*it]);
       const std::size_t c0 = *run, n0 = next(c0);
@@ -135,36 +152,20 @@ Topology analyze_topology(const Soup& soup) {
     t.face_component[f] = comp_id[r];
   }
 
-  // Duplicate faces: identical sorted vertex lists.
-  std::vector<std::size_t> order(nf);
-  std::iota(order.begin(), order.end(), 0);
-  auto key = [&](std::size_t f) {
+  // Duplicate polygons and faces repeating an index (rare): identical sorted vertex lists.
+  std::vector<std::pair<std::vector<Index>, std::size_t>> keyed;
+  for (std::size_t f = 0; f < nf; ++f) {
     FaceView v = soup.face(f);
+    const bool repeated = std::binary_search(t.repeated_index_faces.begin(), t.repeated_index_faces.end(), f);
+    if (v.size() == 3 && !repeated) continue;  // handled on the edges above
     std::vector<Index> k(v.begin(), v.end());
     std::sort(k.begin(), k.end());
-    return k;
-  };
-  if (soup.is_triangle_soup()) {
-    std::vector<std::array<Index, 3>> keys(nf);
-    for (std::size_t f = 0; f < nf; ++f) {
-      FaceView v = soup.face(f);
-      keys[f] = {v[0], v[1], v[2]};
-      std::sort(keys[f].begin(), keys[f].end());
-    }
-    std::sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) {
-      return keys[x] != keys[y] ? keys[x] < keys[y] : x < y;
-    });
-    for (std::size_t i = 1; i < nf; ++i)
-      if (keys[order[i]] == keys[order[i - 1]]) t.duplicate_faces.push_back({order[i - 1], order[i]});
-  } else {
-    std::vector<std::vector<Index>> keys(nf);
-    for (std::size_t f = 0; f < nf; ++f) keys[f] = key(f);
-    std::sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) {
-      return keys[x] != keys[y] ? keys[x] < keys[y] : x < y;
-    });
-    for (std::size_t i = 1; i < nf; ++i)
-      if (keys[order[i]] == keys[order[i - 1]]) t.duplicate_faces.push_back({order[i - 1], order[i]});
+    keyed.push_back({std::move(k), f});
   }
+  std::sort(keyed.begin(), keyed.end());
+  for (std::size_t i = 1; i < keyed.size(); ++i)
+    if (keyed[i].first == keyed[i - 1].first) t.duplicate_faces.push_back({keyed[i - 1].second, keyed[i].second});
+  std::sort(t.duplicate_faces.begin(), t.duplicate_faces.end());
   return t;
 }
 

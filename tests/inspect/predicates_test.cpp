@@ -1,0 +1,67 @@
+// The filtered angle predicates against a plain exact-rational evaluation, on
+// random triangles and on triangles built to sit at the threshold, including
+// magnitudes where the static double filter must hand over.
+#include <catch2/catch.hpp>
+
+#include <CGAL/Exact_rational.h>
+
+#include <cmath>
+#include <random>
+
+#include "polyheal/inspect/predicates.h"
+
+using namespace polyheal;
+using Q = CGAL::Exact_rational;
+
+namespace {
+
+/// angle at a between ab and ac compared with acos(c), in rationals only.
+int exact_compare(const Point3d& a, const Point3d& b, const Point3d& p, double c) {
+  Q u[3], v[3];
+  for (int i = 0; i < 3; ++i) {
+    u[i] = Q(b[i]) - Q(a[i]);
+    v[i] = Q(p[i]) - Q(a[i]);
+  }
+  const Q d = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+  const Q uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+  // cos(angle) = d / sqrt(uu vv) vs c: sign of d - c sqrt(uu vv)
+  const Q lhs = d * d, rhs = Q(c) * Q(c) * uu * vv;
+  const int sd = CGAL::sign(d), sc = c > 0 ? 1 : (c < 0 ? -1 : 0);
+  int cos_vs_c;  // sign of cos(angle) - c
+  if (sd != sc) cos_vs_c = sd > sc ? 1 : -1;
+  else if (sd == 0) cos_vs_c = 0;
+  else cos_vs_c = sd * CGAL::sign(lhs - rhs);
+  return -cos_vs_c;  // angle larger <=> cosine smaller
+}
+
+}  // namespace
+
+TEST_CASE("predicates: angle tests equal exact rational evaluation", "[inspect]") {
+  std::mt19937_64 rng(1234);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const double pi = 3.14159265358979323846;
+  int checked = 0;
+  for (double threshold : {175.0, 5.0, 90.0, 120.0, 0.1}) {
+    const double c = std::cos(threshold * pi / 180);
+    for (double scale : {1.0, 1e-80, 1e80, 1e-150, 3e5}) {
+      for (int i = 0; i < 400; ++i) {
+        Point3d a{u(rng) * scale, u(rng) * scale, u(rng) * scale}, b, p;
+        if (i % 2 == 0) {  // random
+          b = {u(rng) * scale, u(rng) * scale, u(rng) * scale};
+          p = {u(rng) * scale, u(rng) * scale, u(rng) * scale};
+        } else {  // at the threshold, up to rounding of the construction
+          const double t = threshold * pi / 180 * (1 + 1e-15 * u(rng));
+          b = {a[0] + scale, a[1], a[2]};
+          p = {a[0] + scale * std::cos(t), a[1] + scale * std::sin(t), a[2]};
+        }
+        if (b == a || p == a) continue;
+        const int e = exact_compare(a, b, p, c);
+        INFO("threshold " << threshold << " scale " << scale << " i " << i);
+        CHECK(angle_greater(a, b, p, c) == (e > 0));
+        CHECK(angle_less(a, b, p, c) == (e < 0));
+        ++checked;
+      }
+    }
+  }
+  CHECK(checked > 9000);
+}
