@@ -185,8 +185,8 @@ TEST_CASE("inspect: TetGen's tolerances are reported apart from exact defects", 
   wide.tetgen_fold_angle = 0.01;
   CHECK(inspect(s, wide).sharp_folds.empty());
 
-  // Nearly collinear at TetGen's 1e-8: area / longest edge^2 decides, exactly.
-  for (const auto& [h, nearly] : {std::pair{1e-9, true}, {4.9e-9, true}, {5.1e-9, false}, {1e-7, false}}) {
+  // Nearly collinear at TetGen's 1e-8: |ab x ac| = h against 1e-8 * longest edge^2 = 1e-8, exactly.
+  for (const auto& [h, nearly] : {std::pair{1e-9, true}, {0.99e-8, true}, {1.01e-8, false}, {1e-7, false}}) {
     INFO("height " << h);
     const Soup sliver = test::soup({{0, 0, 0}, {1, 0, 0}, {0.5, h, 0}}, {{0, 1, 2}});
     const Report q = inspect(sliver);
