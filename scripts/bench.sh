@@ -20,13 +20,15 @@ for f in vhacd__Hand1.off cgal__bunny00.off vhacd__crank.off trimesh__cycloidal.
   [ -f "$corpus/$f" ] && inputs+=("$corpus/$f")
 done
 
-# best_of CMD...: prints "seconds peakKiB" of the fastest of $runs runs.
+# best_of CMD...: prints "seconds peakKiB" of the fastest of $runs runs, or
+# "fails 0" when the command exits with 2 or more (the peer cannot read it).
 best_of() {
-  local best="" mem="" i
+  local best="" mem="" i code s m
   for ((i = 0; i < runs; i++)); do
-    /usr/bin/time -f "%e %M" -o "$work/time.txt" "$@" >"$work/out.txt" 2>/dev/null || true
-    read -r s m < "$work/time.txt" || true
-    s=${s##* }
+    code=0
+    /usr/bin/time -f "%e %M" -o "$work/time.txt" "$@" >"$work/out.txt" 2>/dev/null || code=$?
+    if [ "$code" -ge 2 ]; then echo "fails 0"; return; fi
+    read -r s m < <(tail -n 1 "$work/time.txt")
     if [ -z "$best" ] || awk "BEGIN{exit !($s < $best)}"; then best=$s; mem=$m; fi
   done
   echo "$best $mem"
@@ -35,17 +37,22 @@ best_of() {
 rows=""
 for f in "${inputs[@]}"; do
   name=$(basename "$f")
-  faces=$("$b/polyheal" check --json "$f" | sed -n 's/.*"faces": \([0-9]*\).*/\1/p' | head -1)
-  pairs=$("$b/polyheal" check --json "$f" | sed -n 's/.*"self_intersecting_pairs": \([0-9]*\).*/\1/p' | head -1)
+  "$b/polyheal" check --json "$f" > "$work/check.json" || [ $? -eq 1 ]  # 1: defects found, fine here
+  faces=$(sed -n 's/.*"faces": \([0-9]*\).*/\1/p' "$work/check.json" | head -1)
+  pairs=$(sed -n 's/.*"self_intersecting_pairs": \([0-9]*\).*/\1/p' "$work/check.json" | head -1)
   read -r ph_par ph_par_mem < <(best_of "$b/polyheal" check "$f")
   read -r ph_seq ph_seq_mem < <(best_of "$b/polyheal" check --sequential "$f")
   read -r cg_seq cg_seq_mem < <(best_of "$b/cgal_check_peer" "$f")
   cg_seq_split=$(cat "$work/out.txt")
   read -r cg_par cg_par_mem < <(best_of "$b/cgal_check_peer" "$f" --parallel)
   cg_par_split=$(cat "$work/out.txt")
-  cg_pairs=${cg_par_split##* }
-  ratio=$(awk "BEGIN{printf \"%.1fx\", $cg_par / $ph_par}")
-  rows+="| $name | $faces | $pairs / ${cg_pairs:-n/a} | $ph_par s, $((ph_par_mem / 1024)) MB | $ph_seq s | $cg_seq s (read ${cg_seq_split%% *}) | $cg_par s, $((cg_par_mem / 1024)) MB | $ratio |"$'\n'
+  if [ "$cg_par" = fails ]; then
+    rows+="| $name | $faces | $pairs / — | $ph_par s, $((ph_par_mem / 1024)) MB | $ph_seq s | cannot read it | cannot read it | — |"$'\n'
+  else
+    cg_pairs=${cg_par_split##* }
+    ratio=$(awk "BEGIN{printf \"%.1fx\", $cg_par / $ph_par}")
+    rows+="| $name | $faces | $pairs / $cg_pairs | $ph_par s, $((ph_par_mem / 1024)) MB | $ph_seq s | $cg_seq s (read ${cg_seq_split%% *} s) | $cg_par s, $((cg_par_mem / 1024)) MB | $ratio |"$'\n'
+  fi
   echo "$name: polyheal $ph_par s (seq $ph_seq s), CGAL $cg_par s (seq $cg_seq s)" >&2
 done
 
