@@ -2,6 +2,7 @@
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <chrono>
 #include <cmath>
@@ -39,6 +40,8 @@ Shape classify(const Point3d& a, const Point3d& b, const Point3d& c, double cos_
 
 constexpr double kPi = 3.14159265358979323846;
 
+void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions& o, Report& r);
+
 }  // namespace
 
 bool Report::certified_clean() const {
@@ -51,12 +54,38 @@ Report inspect(const Soup& input, const InspectOptions& o) {
   auto t0 = std::chrono::steady_clock::now();
   if (o.observer) o.observer->stage("topology");
   const Weld weld = weld_identical_points(input.points);
-  const Soup soup = weld.merged ? apply_weld(input, weld) : input;
+  Soup welded;
+  if (weld.merged) welded = apply_weld(input, weld);
+  const Soup& soup = weld.merged ? welded : input;
   r.vertices = soup.points.size();
   r.faces = soup.face_count();
   r.merged_identical_vertices = weld.merged;
   for (std::size_t f = 0; f < r.faces; ++f) r.non_triangle_faces += soup.face(f).size() != 3;
 
+  // The self-intersection pass needs only the welded soup: on two cores it
+  // runs beside the topology and shape passes, filling idle time its own
+  // parallel phases leave (measured in BENCHMARKS.md).
+  auto self_intersection_pass = [&] {
+    const auto t = std::chrono::steady_clock::now();
+    SelfIntersectionOptions si;
+    si.parallel = o.parallel;
+    si.observer = o.observer;
+    r.self_intersections = find_self_intersections(soup, si);
+    r.seconds_self_intersections = seconds_since(t);
+  };
+  auto topology_and_shape_pass = [&] { topology_and_shape(soup, weld, o, r); };
+  if (o.parallel) tbb::parallel_invoke(self_intersection_pass, topology_and_shape_pass);
+  else {
+    topology_and_shape_pass();
+    self_intersection_pass();
+  }
+  return r;
+}
+
+namespace {
+
+void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions& o, Report& r) {
+  auto t0 = std::chrono::steady_clock::now();
   const Topology topo = analyze_topology(soup);
   r.components = topo.components;
   r.isolated_vertices = topo.isolated_vertices - weld.merged;  // welded-away twins are not isolated points
@@ -158,14 +187,8 @@ Report inspect(const Soup& input, const InspectOptions& o) {
   }
   r.signed_volume = static_cast<double>(volume / 6);
   r.seconds_shape = seconds_since(t0);
-
-  t0 = std::chrono::steady_clock::now();
-  SelfIntersectionOptions si;
-  si.parallel = o.parallel;
-  si.observer = o.observer;
-  r.self_intersections = find_self_intersections(soup, si);
-  r.seconds_self_intersections = seconds_since(t0);
-  return r;
 }
+
+}  // namespace
 
 }  // namespace polyheal

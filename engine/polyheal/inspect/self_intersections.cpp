@@ -40,19 +40,23 @@ InputKernel::Point_3 point(const Soup& s, Index i) {
   return {p[0], p[1], p[2]};
 }
 
-/// The exact triangles, with degeneracy decided once per triangle (in parallel).
-std::vector<Tri> exact_triangles(const Soup& s, const std::vector<FanTriangle>& tris, bool parallel) {
-  std::vector<Tri> out(tris.size());
-  auto build = [&](std::size_t i) {
+Tri exact_triangle(const Soup& s, const FanTriangle& t, bool degenerate) {
+  return Tri{{point(s, t.v[0]), point(s, t.v[1]), point(s, t.v[2])}, {t.v[0], t.v[1], t.v[2]}, degenerate};
+}
+
+/// Degeneracy (exact collinearity) of each triangle, decided once, in parallel.
+std::vector<char> degenerate_flags(const Soup& s, const std::vector<FanTriangle>& tris, bool parallel) {
+  std::vector<char> out(tris.size());
+  auto decide = [&](std::size_t i) {
     const FanTriangle& t = tris[i];
-    out[i] = detail::make_tri<InputKernel>(point(s, t.v[0]), point(s, t.v[1]), point(s, t.v[2]), t.v[0], t.v[1], t.v[2]);
+    out[i] = CGAL::collinear(point(s, t.v[0]), point(s, t.v[1]), point(s, t.v[2]));
   };
   if (parallel)
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tris.size(), 8192), [&](const auto& r) {
-      for (std::size_t i = r.begin(); i != r.end(); ++i) build(i);
+      for (std::size_t i = r.begin(); i != r.end(); ++i) decide(i);
     });
   else
-    for (std::size_t i = 0; i < tris.size(); ++i) build(i);
+    for (std::size_t i = 0; i < tris.size(); ++i) decide(i);
   return out;
 }
 
@@ -61,7 +65,7 @@ std::vector<Tri> exact_triangles(const Soup& s, const std::vector<FanTriangle>& 
 template <class Found>
 void scan(const Soup& s, const std::vector<FanTriangle>& tris, const SelfIntersectionOptions& o, Found found,
           const std::atomic<bool>& stop) {
-  const std::vector<Tri> exact = exact_triangles(s, tris, o.parallel);
+  const std::vector<char> degenerate = degenerate_flags(s, tris, o.parallel);
   std::vector<Box> boxes;
   boxes.reserve(tris.size());
   for (std::size_t i = 0; i < tris.size(); ++i) {
@@ -81,7 +85,9 @@ void scan(const Soup& s, const std::vector<FanTriangle>& tris, const SelfInterse
     if (stop.load(std::memory_order_relaxed)) return;
     const FanTriangle &a = tris[x.info()], &b = tris[y.info()];
     if (a.face == b.face) return;  // two fan triangles of one polygon
-    if (detail::faces_intersect<InputKernel>(exact[x.info()], exact[y.info()])) found(a.face, b.face);
+    if (detail::faces_intersect<InputKernel>(exact_triangle(s, a, degenerate[x.info()]),
+                                             exact_triangle(s, b, degenerate[y.info()])))
+      found(a.face, b.face);
   };
   if (o.parallel)
     CGAL::box_self_intersection_d<CGAL::Parallel_if_available_tag>(pointers.begin(), pointers.end(), callback,
