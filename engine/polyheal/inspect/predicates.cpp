@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace polyheal {
 namespace {
@@ -16,7 +17,7 @@ using Rational = CGAL::Exact_rational;
 /// Runs `eval<NT>()` with intervals and, if any comparison is uncertain,
 /// again with exact rationals. (Callers try a static double filter first.)
 template <class Eval>
-bool filtered(Eval eval) {
+auto filtered(Eval eval) {
   {
     CGAL::Protect_FPU_rounding<true> protect;
     try {
@@ -44,21 +45,15 @@ Vec<NT> cross(const Vec<NT>& u, const Vec<NT>& v) {
   return {u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
 }
 
-/// angle(u, v) > acos(c)  <=>  u.v < c |u||v|, decided without square roots.
+/// Signs of u.v and of T = (u.v)^2 - c^2 (u.u)(v.v): they decide how the angle
+/// between u and v compares with acos(c), without square roots. With
+/// intervals, an undecidable sign throws Uncertain_conversion_exception.
 template <class NT>
-bool vector_angle_greater(const Vec<NT>& u, const Vec<NT>& v, double c) {
+std::pair<int, int> angle_signs(const Vec<NT>& u, const Vec<NT>& v, double c) {
   const NT d = dot(u, v);
-  const NT rhs = NT(c) * NT(c) * dot(u, u) * dot(v, v);
-  if (c >= 0) return bool(d < 0) || bool(d * d < rhs);
-  return bool(d < 0) && bool(d * d > rhs);
-}
-/// angle(u, v) < acos(c)  <=>  u.v > c |u||v|.
-template <class NT>
-bool vector_angle_less(const Vec<NT>& u, const Vec<NT>& v, double c) {
-  const NT d = dot(u, v);
-  const NT rhs = NT(c) * NT(c) * dot(u, u) * dot(v, v);
-  if (c >= 0) return bool(d > 0) && bool(d * d > rhs);
-  return bool(d >= 0) || bool(d * d < rhs);
+  const NT t = d * d - NT(c) * NT(c) * dot(u, u) * dot(v, v);
+  return {static_cast<int>(static_cast<CGAL::Sign>(CGAL::sign(d))),
+          static_cast<int>(static_cast<CGAL::Sign>(CGAL::sign(t)))};
 }
 
 /// Static filter for the angle tests, in plain double arithmetic.
@@ -100,12 +95,26 @@ StaticAngle static_angle(const Point3d& apex, const Point3d& b, const Point3d& c
   return r;
 }
 
-/// The angle decisions from the signs of u.v and T (see vector_angle_*).
+/// angle > acos(c)  <=>  u.v < c |u||v|, from the signs of u.v and T.
 bool greater_from_signs(int dot, int test, double c) {
   return c >= 0 ? (dot < 0 || test < 0) : (dot < 0 && test > 0);
 }
+/// angle < acos(c)  <=>  u.v > c |u||v|.
 bool less_from_signs(int dot, int test, double c) {
   return c >= 0 ? (dot > 0 && test > 0) : (dot >= 0 || test < 0);
+}
+
+/// The angle at `apex` between rays to b and c, compared with acos(cos_threshold)
+/// by `decide`: static filter, then intervals, then rationals.
+template <class Decide>
+bool angle_at(const Point3d& apex, const Point3d& b, const Point3d& c, double cos_threshold, Decide decide) {
+  const StaticAngle s = static_angle(apex, b, c, cos_threshold);
+  if (s.decided) return decide(s.dot_sign, s.test_sign, cos_threshold);
+  const auto [dot_sign, test_sign] = filtered([&](auto nt) {
+    using NT = decltype(nt);
+    return angle_signs(sub<NT>(b, apex), sub<NT>(c, apex), cos_threshold);
+  });
+  return decide(dot_sign, test_sign, cos_threshold);
 }
 
 }  // namespace
@@ -116,31 +125,22 @@ bool is_collinear(const Point3d& a, const Point3d& b, const Point3d& c) {
 }
 
 bool angle_greater(const Point3d& apex, const Point3d& b, const Point3d& c, double cos_threshold) {
-  const StaticAngle s = static_angle(apex, b, c, cos_threshold);
-  if (s.decided) return greater_from_signs(s.dot_sign, s.test_sign, cos_threshold);
-  return filtered([&](auto nt) {
-    using NT = decltype(nt);
-    return vector_angle_greater(sub<NT>(b, apex), sub<NT>(c, apex), cos_threshold);
-  });
+  return angle_at(apex, b, c, cos_threshold, greater_from_signs);
 }
 
 bool angle_less(const Point3d& apex, const Point3d& b, const Point3d& c, double cos_threshold) {
-  const StaticAngle s = static_angle(apex, b, c, cos_threshold);
-  if (s.decided) return less_from_signs(s.dot_sign, s.test_sign, cos_threshold);
-  return filtered([&](auto nt) {
-    using NT = decltype(nt);
-    return vector_angle_less(sub<NT>(b, apex), sub<NT>(c, apex), cos_threshold);
-  });
+  return angle_at(apex, b, c, cos_threshold, less_from_signs);
 }
 
 bool fold_angle_less(const Point3d& p, const Point3d& q, const Point3d& r, const Point3d& s, double cos_threshold) {
   // n1 = pq x pr and n2 = pq x ps are parallel when r and s lie on the same
   // half-plane (folded) and opposite when the surface is flat.
-  return filtered([&](auto nt) {
+  const auto [dot_sign, test_sign] = filtered([&](auto nt) {
     using NT = decltype(nt);
     const Vec<NT> e = sub<NT>(q, p);
-    return vector_angle_less(cross(e, sub<NT>(r, p)), cross(e, sub<NT>(s, p)), cos_threshold);
+    return angle_signs(cross(e, sub<NT>(r, p)), cross(e, sub<NT>(s, p)), cos_threshold);
   });
+  return less_from_signs(dot_sign, test_sign, cos_threshold);
 }
 
 bool is_nearly_degenerate(const Point3d& a, const Point3d& b, const Point3d& c, double eps) {
