@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <atomic>
+#include <limits>
 
 #include <CGAL/box_intersection_d.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include "polyheal/inspect/detail/triangle_pair.h"
 
@@ -60,6 +62,66 @@ std::vector<char> degenerate_flags(const Soup& s, const std::vector<FanTriangle>
   return out;
 }
 
+/// All intersecting pairs of `boxes` through `callback`, each once.
+///
+/// Parallel form: split at the median box centre along the widest axis into
+/// L (boxes entirely below the split value), R (entirely above) and S
+/// (straddling it). An L box and an R box cannot overlap, so
+///   pairs(X) = pairs(L) + pairs(R) + pairs(S) + S x L + S x R,
+/// with pairs(L), pairs(R) split again (`depth` levels), and every part handed
+/// to CGAL's sequential box_intersection_d. Unlike CGAL's own Parallel_tag
+/// (four input-order chunks, sixteen block pairs, each re-sorted), the parts
+/// are disjoint in space, so the work does not grow with the split.
+template <class Callback>
+void box_pairs(std::vector<const Box*>& boxes, const Callback& callback, int depth) {
+  auto sequential_self = [&](std::vector<const Box*>& v) {
+    CGAL::box_self_intersection_d<CGAL::Sequential_tag>(v.begin(), v.end(), callback, Traits(), kCutoff);
+  };
+  if (depth == 0 || boxes.size() < 20000) return sequential_self(boxes);
+  double lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::numeric_limits<double>::infinity();
+    hi[a] = -lo[a];
+  }
+  auto centre = [](const Box* b, int a) { return 0.5 * b->min_coord(a) + 0.5 * b->max_coord(a); };
+  for (const Box* b : boxes)
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], centre(b, a));
+      hi[a] = std::max(hi[a], centre(b, a));
+    }
+  int axis = 0;
+  for (int a = 1; a < 3; ++a)
+    if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
+  auto mid = boxes.begin() + static_cast<std::ptrdiff_t>(boxes.size() / 2);
+  std::nth_element(boxes.begin(), mid, boxes.end(),
+                   [&](const Box* p, const Box* q) { return centre(p, axis) < centre(q, axis); });
+  const double split = centre(*mid, axis);
+  std::vector<const Box*> below, above, straddling;
+  for (const Box* b : boxes) {
+    if (b->max_coord(axis) < split) below.push_back(b);
+    else if (b->min_coord(axis) > split) above.push_back(b);
+    else straddling.push_back(b);
+  }
+  if (straddling.size() > boxes.size() / 4) return sequential_self(boxes);  // no useful split
+  std::vector<const Box*>().swap(boxes);
+  // box_intersection_d reorders its inputs: each task gets its own copy of S.
+  std::vector<const Box*> straddling_copy = straddling;
+  auto cross = [&](std::vector<const Box*>& a, std::vector<const Box*>& b) {
+    CGAL::box_intersection_d<CGAL::Sequential_tag>(a.begin(), a.end(), b.begin(), b.end(), callback, Traits(),
+                                                   kCutoff);
+  };
+  tbb::parallel_invoke(
+      [&] {
+        cross(straddling, below);
+        box_pairs(below, callback, depth - 1);
+      },
+      [&] {
+        cross(straddling_copy, above);
+        sequential_self(straddling_copy);
+        box_pairs(above, callback, depth - 1);
+      });
+}
+
 /// Runs the broad phase and calls `found(a, b)` for each intersecting pair of
 /// fan triangles (from any thread). `stop` ends the search early.
 template <class Found>
@@ -89,12 +151,7 @@ void scan(const Soup& s, const std::vector<FanTriangle>& tris, const SelfInterse
                                              exact_triangle(s, b, degenerate[y.info()])))
       found(a.face, b.face);
   };
-  if (o.parallel)
-    CGAL::box_self_intersection_d<CGAL::Parallel_if_available_tag>(pointers.begin(), pointers.end(), callback,
-                                                                   Traits(), kCutoff);
-  else
-    CGAL::box_self_intersection_d<CGAL::Sequential_tag>(pointers.begin(), pointers.end(), callback, Traits(),
-                                                        kCutoff);
+  box_pairs(pointers, callback, o.parallel ? 2 : 0);  // 2 levels: 4 leaves, enough to balance 2 cores
 }
 
 }  // namespace

@@ -1,7 +1,6 @@
 #include "polyheal/mesh/weld.h"
 
 #include <cstring>
-#include <unordered_map>
 
 namespace polyheal {
 namespace {
@@ -35,12 +34,32 @@ PointKey key_of(const Point3d& p) {
 Weld weld_identical_points(const std::vector<Point3d>& points) {
   Weld w;
   w.representative.resize(points.size());
-  std::unordered_map<PointKey, Index, PointKeyHash> first;
-  first.reserve(points.size());
+  // Open addressing (linear probing) over point indices: a flat table twice
+  // the point count, no node allocation.
+  std::size_t capacity = 16;
+  while (capacity < 2 * points.size()) capacity *= 2;
+  const std::size_t mask = capacity - 1;
+  constexpr Index kEmpty = ~Index(0);
+  std::vector<Index> table(capacity, kEmpty);
+  std::vector<PointKey> keys(points.size());
+  const PointKeyHash hash;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    auto [it, inserted] = first.emplace(key_of(points[i]), static_cast<Index>(i));
-    w.representative[i] = it->second;
-    if (!inserted) ++w.merged;
+    keys[i] = key_of(points[i]);
+    std::size_t slot = hash(keys[i]) & mask;
+    for (;;) {
+      const Index j = table[slot];
+      if (j == kEmpty) {
+        table[slot] = static_cast<Index>(i);
+        w.representative[i] = static_cast<Index>(i);
+        break;
+      }
+      if (keys[j] == keys[i]) {
+        w.representative[i] = j;
+        ++w.merged;
+        break;
+      }
+      slot = (slot + 1) & mask;
+    }
   }
   return w;
 }

@@ -37,9 +37,12 @@ bool primitives_intersect(const Primitive<K>& x, const Primitive<K>& y) {
 }
 
 /// Segment pq against non-degenerate triangle t. Most pairs of neighbours
-/// are rejected by the first test: p and q strictly on one side of t's plane.
+/// are rejected by the first two tests: disjoint boxes, or p and q strictly
+/// on one side of t's plane.
 template <class K>
 bool edge_meets_triangle(const typename K::Point_3& p, const typename K::Point_3& q, const Tri<K>& t) {
+  // Bounding boxes first: exact for double points, conservative for Epeck's.
+  if (!CGAL::do_overlap(p.bbox() + q.bbox(), t.p[0].bbox() + t.p[1].bbox() + t.p[2].bbox())) return false;
   const CGAL::Orientation op = CGAL::orientation(t.p[0], t.p[1], t.p[2], p);
   if (op != CGAL::COPLANAR && op == CGAL::orientation(t.p[0], t.p[1], t.p[2], q)) return false;
   return CGAL::do_intersect(typename K::Segment_3(p, q), typename K::Triangle_3(t.p[0], t.p[1], t.p[2]));
