@@ -194,3 +194,45 @@ TEST_CASE("read: PLY ascii and binary big endian, extra properties skipped", "[i
   CHECK(s.points[2][1] == 2.5);
   CHECK(s.face(0)[2] == 2);
 }
+
+TEST_CASE("read: large OFF is parsed in parallel chunks; the first error in file order wins", "[io]") {
+  // 100k vertices and 100k faces: several chunks of each kind.
+  const std::size_t n = 100000;
+  auto body = [&](std::size_t bad_vertex, std::size_t bad_face) {
+    std::string off = "OFF\n# a comment line\n" + std::to_string(n) + " " + std::to_string(n) + " 0\n";
+    for (std::size_t i = 0; i < n; ++i) {
+      if (i == n / 2) off += "\n# blank and comment lines inside the body\n";
+      off += i == bad_vertex ? "1 2 oops\n" : std::to_string(i) + " 0.5 -" + std::to_string(i % 7) + "\n";
+    }
+    for (std::size_t f = 0; f < n; ++f)
+      off += f == bad_face ? "3 0 1 " + std::to_string(n) + "\n"
+                           : "3 " + std::to_string(f) + " " + std::to_string((f + 1) % n) + " " +
+                                 std::to_string((f + 2) % n) + "\n";
+    return off;
+  };
+  const std::size_t none = ~std::size_t(0);
+  // Line numbers: 3 header lines, the vertex lines, 2 extra lines after vertex n/2.
+  auto vertex_line = [&](std::size_t i) { return 3 + i + 1 + (i >= n / 2 ? 2 : 0); };
+  auto face_line = [&](std::size_t f) { return 3 + n + 2 + f + 1; };
+
+  const Soup ok = parse_soup(body(none, none), Format::off, "big.off");
+  REQUIRE(ok.points.size() == n);
+  REQUIRE(ok.face_count() == n);
+  CHECK(ok.points[n - 1][0] == double(n - 1));
+  CHECK(ok.points[70001][2] == -double(70001 % 7));
+  CHECK(ok.face(n - 1)[2] == 1);
+
+  auto error = [&](std::size_t v, std::size_t f) {
+    try {
+      parse_soup(body(v, f), Format::off, "big.off");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  CHECK(error(70000, none) == "big.off:line " + std::to_string(vertex_line(70000)) + ": non-numeric coordinate 'oops'");
+  CHECK(error(none, 99999) ==
+        "big.off:line " + std::to_string(face_line(99999)) + ": vertex index 100000 out of range [0, 100000)");
+  // Errors in a vertex chunk and a later face chunk: the earlier one is reported.
+  CHECK(error(90000, 10) == error(90000, none));
+}

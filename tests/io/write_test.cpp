@@ -45,6 +45,24 @@ TEST_CASE("write: OFF, OBJ and PLY round-trip every double bit for bit", "[io][s
     }
 }
 
+TEST_CASE("write: a large soup round-trips through OFF exactly (parallel reader)", "[io]") {
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Soup s;
+  for (int i = 0; i < 150000; ++i) s.points.push_back({u(rng), u(rng) * 1e-7, u(rng) * 1e9});
+  for (Index i = 0; i + 3 < s.points.size(); i += 2) {
+    const Index quad[4] = {i, i + 1, i + 3, i + 2};
+    if (i % 3 == 0) s.add_face(quad, quad + 4);  // some polygons among the triangles
+    else s.add_triangle(i, i + 1, i + 2);
+  }
+  const std::string path = scratch("large.off");
+  write_soup(s, path);
+  const Soup back = read_soup(path);
+  CHECK(back.points == s.points);
+  CHECK(back.indices == s.indices);
+  CHECK(back.offsets == s.offsets);
+}
+
 TEST_CASE("write: STL says when it rounded doubles to float", "[io]") {
   const Soup s = awkward_soup();
   const std::string path = scratch("rounded.stl");

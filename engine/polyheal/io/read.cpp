@@ -3,11 +3,17 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <unordered_map>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "polyheal/mesh/weld.h"
 
@@ -114,7 +120,114 @@ void check_declared(const Text& t, unsigned long long count, unsigned long long 
 // ---------------------------------------------------------------------------
 // OFF
 
-Soup parse_off(const std::string& bytes, const std::string& name) {
+/// A malformed record found by a parallel chunk: where and why.
+struct RecordError {
+  const char* where = nullptr;
+  std::string reason;
+};
+
+/// Parses records [first, last) with `parse(i, text)`; on InputError keeps
+/// the first one (in file order) of the range.
+template <class Parse>
+void parse_records(const std::vector<const char*>& lines, const Text& t, std::size_t first, std::size_t last,
+                   RecordError& error, Parse parse) {
+  for (std::size_t i = first; i < last; ++i) {
+    Text r{lines[i], t.end, 0, t.name};
+    try {
+      parse(i, r);
+    } catch (const InputError& e) {
+      error = {lines[i], e.reason()};
+      return;
+    }
+  }
+}
+
+/// The OFF body after the counts line: one record per content line (blank
+/// and `#` lines skipped). Phase 1 finds the content lines (a memchr scan);
+/// phase 2 parses vertex and face records in parallel chunks. Of several
+/// malformed records the first in file order is reported, with its line, as
+/// a sequential reader would.
+Soup parse_off_body(Text& t, std::size_t nv, std::size_t nf) {
+  const char* body = t.p;
+  const std::size_t body_line = t.line;
+  auto line_at = [&](const char* where) {
+    return body_line + static_cast<std::size_t>(std::count(body, where, '\n'));
+  };
+  auto fail_at = [&](const char* where, const std::string& reason) -> InputError {
+    return InputError(t.name, "line " + std::to_string(line_at(where)), reason);
+  };
+
+  std::vector<const char*> lines;  // content line starts, up to one past the declared records
+  lines.reserve(nv + nf + 1);
+  for (const char* p = body; p < t.end && lines.size() <= nv + nf;) {
+    const char* q = p;
+    while (q < t.end && Text::blank(*q)) ++q;
+    if (q < t.end && *q != '\n' && *q != '#') lines.push_back(q);
+    const void* nl = std::memchr(q, '\n', static_cast<std::size_t>(t.end - q));
+    p = nl ? static_cast<const char*>(nl) + 1 : t.end;
+  }
+
+  Soup s;
+  s.points.resize(std::min(nv, lines.size()));
+  const std::size_t faces_present = lines.size() > nv ? std::min(nf, lines.size() - nv) : 0;
+  constexpr std::size_t kChunk = 1 << 15;
+  const std::size_t vertex_chunks = (s.points.size() + kChunk - 1) / kChunk;
+  const std::size_t face_chunks = (faces_present + kChunk - 1) / kChunk;
+  std::vector<RecordError> errors(vertex_chunks + face_chunks);
+  std::vector<std::vector<Index>> chunk_indices(face_chunks);
+  std::vector<std::vector<std::uint32_t>> chunk_sizes(face_chunks);
+
+  auto vertex = [&](std::size_t i, Text& r) {
+    s.points[i] = {r.number("coordinate"), r.number("coordinate"), r.number("coordinate")};
+  };  // the rest of the line (colours, normals) is ignored
+  auto run_chunk = [&](std::size_t c) {
+    if (c < vertex_chunks) {
+      parse_records(lines, t, c * kChunk, std::min(s.points.size(), (c + 1) * kChunk), errors[c], vertex);
+      return;
+    }
+    const std::size_t k = c - vertex_chunks;
+    std::vector<Index>& idx = chunk_indices[k];
+    std::vector<std::uint32_t>& sizes = chunk_sizes[k];
+    auto face = [&](std::size_t, Text& r) {
+      const long long n = r.integer("face size");
+      if (n < 3) r.fail("face with " + std::to_string(n) + " vertices (fewer than 3)");
+      if (static_cast<unsigned long long>(n) > static_cast<unsigned long long>(r.end - r.p))
+        r.fail("face declares " + std::to_string(n) + " vertices, more than the bytes left");
+      for (long long j = 0; j < n; ++j) {
+        const long long i = r.integer("vertex index");
+        check_index(r, i, nv);
+        idx.push_back(static_cast<Index>(i));
+      }
+      sizes.push_back(static_cast<std::uint32_t>(n));
+    };  // face colours: ignored
+    idx.reserve(3 * kChunk);
+    parse_records(lines, t, nv + k * kChunk, nv + std::min(faces_present, (k + 1) * kChunk), errors[c], face);
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_chunks + face_chunks, 1), [&](const auto& range) {
+    for (std::size_t c = range.begin(); c != range.end(); ++c) run_chunk(c);
+  });
+  for (const RecordError& e : errors)  // chunks are in file order
+    if (e.where) throw fail_at(e.where, e.reason);
+
+  if (lines.size() < nv)
+    throw fail_at(t.end, "file ends after " + std::to_string(lines.size()) + " of " + std::to_string(nv) + " vertices");
+  if (faces_present < nf)
+    throw fail_at(t.end, "file ends after " + std::to_string(faces_present) + " of " + std::to_string(nf) + " faces");
+  if (lines.size() > nv + nf)
+    throw fail_at(lines[nv + nf], "unexpected data after the " + std::to_string(nf) + " declared faces");
+
+  std::size_t total = 0;
+  for (const auto& v : chunk_indices) total += v.size();
+  s.indices.reserve(total);
+  s.offsets.reserve(nf + 1);
+  for (std::size_t k = 0; k < face_chunks; ++k) {
+    s.indices.insert(s.indices.end(), chunk_indices[k].begin(), chunk_indices[k].end());
+    for (std::uint32_t n : chunk_sizes[k]) s.offsets.push_back(s.offsets.back() + n);
+  }
+  return s;
+}
+
+Soup parse_off(std::string_view bytes, const std::string& name) {
   Text t{bytes.data(), bytes.data() + bytes.size(), 1, name};
   t.skip_empty_lines();
   std::string_view head = t.token();
@@ -144,41 +257,13 @@ Soup parse_off(const std::string& bytes, const std::string& name) {
   check_declared(t, static_cast<unsigned long long>(nv) * 5 + static_cast<unsigned long long>(nf) * 7, 1,
                  "bytes of vertices and faces");
 
-  Soup s;
-  s.points.reserve(static_cast<std::size_t>(nv));
-  for (long long i = 0; i < nv; ++i) {
-    t.skip_empty_lines();
-    if (t.at_end()) t.fail("file ends after " + std::to_string(i) + " of " + std::to_string(nv) + " vertices");
-    Point3d p{t.number("coordinate"), t.number("coordinate"), t.number("coordinate")};
-    s.points.push_back(p);
-    t.next_line();  // colours, normals, texture coordinates: ignored
-  }
-  s.offsets.reserve(static_cast<std::size_t>(nf) + 1);
-  s.indices.reserve(static_cast<std::size_t>(nf) * 3);
-  for (long long f = 0; f < nf; ++f) {
-    t.skip_empty_lines();
-    if (t.at_end()) t.fail("file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
-    long long n = t.integer("face size");
-    if (n < 3) t.fail("face with " + std::to_string(n) + " vertices (fewer than 3)");
-    if (static_cast<unsigned long long>(n) > static_cast<unsigned long long>(t.end - t.p))
-      t.fail("face declares " + std::to_string(n) + " vertices, more than the bytes left");
-    for (long long k = 0; k < n; ++k) {
-      long long i = t.integer("vertex index");
-      check_index(t, i, s.points.size());
-      s.indices.push_back(static_cast<Index>(i));
-    }
-    s.offsets.push_back(s.indices.size());
-    t.next_line();  // face colours: ignored
-  }
-  t.skip_empty_lines();
-  if (!t.at_end()) t.fail("unexpected data after the " + std::to_string(nf) + " declared faces");
-  return s;
+  return parse_off_body(t, static_cast<std::size_t>(nv), static_cast<std::size_t>(nf));
 }
 
 // ---------------------------------------------------------------------------
 // OBJ
 
-Soup parse_obj(const std::string& bytes, const std::string& name) {
+Soup parse_obj(std::string_view bytes, const std::string& name) {
   Text t{bytes.data(), bytes.data() + bytes.size(), 1, name};
   Soup s;
   std::int32_t group = -1;
@@ -259,7 +344,7 @@ struct StlWelder {
   }
 };
 
-Soup parse_stl_ascii(const std::string& bytes, const std::string& name) {
+Soup parse_stl_ascii(std::string_view bytes, const std::string& name) {
   Text t{bytes.data(), bytes.data() + bytes.size(), 1, name};
   Soup s;
   StlWelder weld{s, {}};
@@ -314,7 +399,7 @@ T load_le(const char* p) {
   return v;
 }
 
-Soup parse_stl_binary(const std::string& bytes, const std::string& name) {
+Soup parse_stl_binary(std::string_view bytes, const std::string& name) {
   const std::uint32_t n = load_le<std::uint32_t>(bytes.data() + 80);
   Soup s;
   StlWelder weld{s, {}};
@@ -341,17 +426,17 @@ Soup parse_stl_binary(const std::string& bytes, const std::string& name) {
   return s;
 }
 
-bool looks_ascii_stl(const std::string& bytes) {
+bool looks_ascii_stl(std::string_view bytes) {
   std::size_t i = 0;
   while (i < bytes.size() && std::isspace(static_cast<unsigned char>(bytes[i]))) ++i;
   if (bytes.compare(i, 5, "solid") != 0) return false;
   const std::size_t probe = std::min<std::size_t>(bytes.size(), 1024);
   if (std::memchr(bytes.data(), '\0', probe)) return false;
-  std::string head = bytes.substr(0, probe);
-  return head.find("facet") != std::string::npos || head.find("endsolid") != std::string::npos;
+  const std::string_view head = bytes.substr(0, probe);
+  return head.find("facet") != std::string_view::npos || head.find("endsolid") != std::string_view::npos;
 }
 
-Soup parse_stl(const std::string& bytes, const std::string& name) {
+Soup parse_stl(std::string_view bytes, const std::string& name) {
   if (looks_ascii_stl(bytes)) return parse_stl_ascii(bytes, name);
   if (bytes.size() < 84)
     throw InputError(name, "byte " + std::to_string(bytes.size()),
@@ -408,7 +493,7 @@ struct PlyElement {
 
 /// Reads binary PLY values of either endianness, tracking the byte offset.
 struct PlyBinary {
-  const std::string& bytes;
+  std::string_view bytes;
   std::size_t pos;
   bool big_endian;
   const std::string& name;
@@ -437,7 +522,7 @@ struct PlyBinary {
   }
 };
 
-Soup parse_ply(const std::string& bytes, const std::string& name) {
+Soup parse_ply(std::string_view bytes, const std::string& name) {
   Text t{bytes.data(), bytes.data() + bytes.size(), 1, name};
   if (t.token() != "ply") t.fail("wrong header: expected 'ply'");
   t.next_line();
@@ -602,7 +687,7 @@ Format format_from_path(const std::string& path) {
   throw InputError(path, "", "unknown file extension '" + ext + "' (expected .off, .obj, .stl or .ply)");
 }
 
-Soup parse_soup(const std::string& bytes, Format format, const std::string& name) {
+Soup parse_soup(std::string_view bytes, Format format, const std::string& name) {
   if (bytes.empty()) throw InputError(name, "", "empty file");
   switch (format) {
     case Format::off: return parse_off(bytes, name);
@@ -618,15 +703,28 @@ Soup read_soup(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) throw InputError(path, "", "is a directory, not a mesh file");
   if (!std::filesystem::exists(path, ec)) throw InputError(path, "", "no such file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "", std::string("cannot open: ") + std::strerror(errno));
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  if (size < 0) throw InputError(path, "", "cannot determine file size (not a regular file?)");
-  in.seekg(0);
-  std::string bytes(static_cast<std::size_t>(size), '\0');
-  if (size > 0 && !in.read(bytes.data(), size)) throw InputError(path, "", "read error");
-  return parse_soup(bytes, format, path);
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) throw InputError(path, "", std::string("cannot open: ") + std::strerror(errno));
+  struct stat st;
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw InputError(path, "", "not a regular file");
+  }
+  const std::size_t size = static_cast<std::size_t>(st.st_size);
+  if (size == 0) {
+    ::close(fd);
+    throw InputError(path, "", "empty file");
+  }
+  // Map the file read-only: no copy, and the parsers read it in place.
+  void* map = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
+  ::close(fd);
+  if (map == MAP_FAILED) throw InputError(path, "", std::string("cannot map: ") + std::strerror(errno));
+  struct Unmap {
+    void* p;
+    std::size_t n;
+    ~Unmap() { ::munmap(p, n); }
+  } unmap{map, size};
+  return parse_soup(std::string_view(static_cast<const char*>(map), size), format, path);
 }
 
 }  // namespace polyheal

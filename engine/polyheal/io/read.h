@@ -12,6 +12,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/soup.h"
@@ -28,6 +29,6 @@ Format format_from_path(const std::string& path);
 Soup read_soup(const std::string& path);
 
 /// Parses an in-memory file; `name` is used in error messages only.
-Soup parse_soup(const std::string& bytes, Format format, const std::string& name);
+Soup parse_soup(std::string_view bytes, Format format, const std::string& name);
 
 }  // namespace polyheal
