@@ -2,6 +2,7 @@
 #pragma once
 
 #include <chrono>
+#include <mutex>
 
 #include "polyheal/observer.h"
 
@@ -16,6 +17,7 @@ class TtyProgress : public Observer {
   void finish();
 
  private:
+  std::mutex mutex_;  // stages arrive from concurrent passes
   bool enabled_;
   std::chrono::steady_clock::time_point start_;
 };

@@ -4,7 +4,9 @@
 namespace polyheal {
 
 /// Passed to long operations. The CLI implements it to draw progress on a
-/// TTY; tests and library users leave it out.
+/// TTY; tests and library users leave it out. Hooks may be called from
+/// several threads at once (inspect() runs its passes concurrently), so an
+/// implementation must be thread-safe.
 class Observer {
  public:
   virtual ~Observer() = default;
