@@ -49,5 +49,13 @@ TEST_CASE("external: tetgen -d agrees with our self-intersection verdict", "[ins
     const std::string out = run("tetgen -d '" + copy + "'");
     INFO(out);
     CHECK((out.find("No faces are intersecting.") != std::string::npos) == r.self_intersections.empty());
+
+    // tetgen -pYQ: tetrahedralise, keeping the surface. --tetgen-ready is a
+    // sufficient condition (conservative, see README); exact intersections
+    // make TetGen abort.
+    const std::string mesh = run("tetgen -pYQ '" + copy + "' >/dev/null 2>&1; echo \"exit=$?\"");
+    INFO(mesh);
+    if (r.tetgen_ready()) CHECK(mesh.find("exit=0") != std::string::npos);
+    if (!r.self_intersections.empty()) CHECK(mesh.find("exit=0") == std::string::npos);
   }
 }
