@@ -102,6 +102,12 @@ struct Text {
   }
 };
 
+/// Vertex ids are 32-bit (mesh/soup.h): more vertices cannot be indexed.
+constexpr unsigned long long kMaxVertices = 0xFFFFFFFEull;
+std::string too_many_vertices(unsigned long long n) {
+  return std::to_string(n) + " vertices: more than polyheal's limit of " + std::to_string(kMaxVertices);
+}
+
 void check_index(const Text& t, long long i, std::size_t nv) {
   if (i < 0 || static_cast<unsigned long long>(i) >= nv)
     t.fail("vertex index " + std::to_string(i) + " out of range [0, " + std::to_string(nv) + ")");
@@ -251,6 +257,7 @@ Soup parse_off(std::string_view bytes, const std::string& name) {
   long long nf = t.integer("face count");
   if (!t.at_eol()) t.integer("edge count");
   if (nv < 0 || nf < 0) t.fail("negative vertex or face count");
+  if (static_cast<unsigned long long>(nv) > kMaxVertices) t.fail(too_many_vertices(nv));
   t.next_line();
   check_declared(t, static_cast<unsigned long long>(nv), 5, "vertices");
   check_declared(t, static_cast<unsigned long long>(nf), 7, "faces");
@@ -325,6 +332,7 @@ Soup parse_obj(std::string_view bytes, const std::string& name) {
                            std::to_string(s.points.size()) + "]");
   if (s.group_names.empty()) s.face_group.clear();
   if (s.face_count() == 0) throw InputError(name, "", "no faces ('f' statements) in OBJ file");
+  if (s.points.size() > kMaxVertices) throw InputError(name, "", too_many_vertices(s.points.size()));
   return s;
 }
 
@@ -401,6 +409,7 @@ T load_le(const char* p) {
 
 Soup parse_stl_binary(std::string_view bytes, const std::string& name) {
   const std::uint32_t n = load_le<std::uint32_t>(bytes.data() + 80);
+  if (3ull * n > kMaxVertices) throw InputError(name, "byte 80", too_many_vertices(3ull * n));
   Soup s;
   StlWelder weld{s, {}};
   weld.ids.reserve(n / 2 + 1);
@@ -610,6 +619,7 @@ Soup parse_ply(std::string_view bytes, const std::string& name) {
     s.points.reserve(vert->count);
     s.offsets.reserve(face->count + 1);
   }
+  if (vert->count > kMaxVertices) throw InputError(name, "header", too_many_vertices(vert->count));
   std::vector<double> values;
   for (const PlyElement& e : elements) {
     const bool is_vert = &e == vert, is_face = &e == face;
