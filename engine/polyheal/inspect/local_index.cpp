@@ -116,8 +116,7 @@ struct LocalIndex::Impl {
     return t;
   }
 
-  bool faces_intersect(face_descriptor f, face_descriptor g) const {
-    const std::vector<Tri> a = triangles(f), b = triangles(g);
+  static bool any_pair_intersects(const std::vector<Tri>& a, const std::vector<Tri>& b) {
     for (const Tri& x : a)
       for (const Tri& y : b)
         if (detail::faces_intersect<Kernel>(x, y)) return true;
@@ -134,6 +133,7 @@ struct LocalIndex::Impl {
     for (face_descriptor f : faces) {
       const std::uint32_t i = static_cast<std::uint32_t>(f);
       const CGAL::Bbox_3 b = bbox_of(f);
+      const std::vector<Tri> tf = triangles(f);
       candidates.assign(oversize_faces.begin(), oversize_faces.end());
       const bool fits = for_each_cell(b, [&](const CellKey& k) {
         auto it = cells.find(k);
@@ -148,7 +148,7 @@ struct LocalIndex::Impl {
         if (j == i) continue;
         if (j < i && std::binary_search(asked.begin(), asked.end(), j)) continue;  // reported from j's side
         if (!CGAL::do_overlap(b, box[j])) continue;
-        if (faces_intersect(f, face_descriptor(j)) && !found(f, face_descriptor(j))) return;
+        if (any_pair_intersects(tf, triangles(face_descriptor(j))) && !found(f, face_descriptor(j))) return;
       }
     }
   }

@@ -61,6 +61,7 @@ Report inspect(const Soup& input, const InspectOptions& o) {
   r.faces = soup.face_count();
   r.merged_identical_vertices = weld.merged;
   for (std::size_t f = 0; f < r.faces; ++f) r.non_triangle_faces += soup.face(f).size() != 3;
+  r.seconds_topology = seconds_since(t0);  // welding counts as topology
 
   // The self-intersection pass needs only the welded soup: on two cores it
   // runs beside the topology and shape passes, filling idle time its own
@@ -98,7 +99,7 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
   r.closed = r.boundary_edges.empty() && r.faces > 0;
   r.manifold = r.nonmanifold_edges.empty() && r.nonmanifold_vertices.empty() && topo.repeated_index_faces.empty();
   r.oriented = r.misoriented_edges.empty();
-  r.seconds_topology = seconds_since(t0);
+  r.seconds_topology += seconds_since(t0);
 
   // Shape of each face (fan triangles of polygons), exactly; in parallel.
   t0 = std::chrono::steady_clock::now();

@@ -125,8 +125,8 @@ void box_pairs(std::vector<const Box*>& boxes, const Callback& callback, int dep
 /// Runs the broad phase and calls `found(a, b)` for each intersecting pair of
 /// fan triangles (from any thread). `stop` ends the search early.
 template <class Found>
-void scan(const Soup& s, const std::vector<FanTriangle>& tris, const SelfIntersectionOptions& o, Found found,
-          const std::atomic<bool>& stop) {
+void scan(const Soup& s, const SelfIntersectionOptions& o, Found found, const std::atomic<bool>& stop) {
+  const std::vector<FanTriangle> tris = fan_triangles(s);
   const std::vector<char> degenerate = degenerate_flags(s, tris, o.parallel);
   std::vector<Box> boxes;
   boxes.reserve(tris.size());
@@ -157,10 +157,9 @@ void scan(const Soup& s, const std::vector<FanTriangle>& tris, const SelfInterse
 }  // namespace
 
 std::vector<FacePair> find_self_intersections(const Soup& soup, const SelfIntersectionOptions& options) {
-  const std::vector<FanTriangle> tris = fan_triangles(soup);
   tbb::enumerable_thread_specific<std::vector<FacePair>> local;
   std::atomic<bool> stop{false};
-  scan(soup, tris, options,
+  scan(soup, options,
        [&](std::size_t f, std::size_t g) { local.local().push_back({std::min(f, g), std::max(f, g)}); }, stop);
   std::vector<FacePair> pairs;
   for (auto& v : local) pairs.insert(pairs.end(), v.begin(), v.end());
@@ -170,9 +169,8 @@ std::vector<FacePair> find_self_intersections(const Soup& soup, const SelfInters
 }
 
 bool does_self_intersect(const Soup& soup, const SelfIntersectionOptions& options) {
-  const std::vector<FanTriangle> tris = fan_triangles(soup);
   std::atomic<bool> stop{false};
-  scan(soup, tris, options, [&](std::size_t, std::size_t) { stop = true; }, stop);
+  scan(soup, options, [&](std::size_t, std::size_t) { stop = true; }, stop);
   return stop.load();
 }
 
