@@ -64,3 +64,22 @@ TEST_CASE("convert: every manifold fixture builds", "[mesh][corpus]") {
     CHECK(m.is_valid(false));
   }
 }
+
+TEST_CASE("convert: exact coordinates round to the nearest double", "[mesh]") {
+  Mesh m;
+  REQUIRE(soup_to_mesh(test::tetrahedron(), m).ok);
+  const vertex_descriptor v = *m.vertices().begin();
+  // 1/3, -2/3 and 0.1/3 are not doubles; their nearest doubles are what IEEE
+  // division of the same operands returns (correctly rounded).
+  m.point(v) = Point(Kernel::FT(1) / 3, Kernel::FT(-2) / 3, Kernel::FT(0.1) / 3);
+  // An exact value within 1e-5 relative of a double but not equal to it: the
+  // lazy approximation alone would not give the nearest double.
+  const Kernel::FT third = Kernel::FT(1) / 3;
+  m.point(*std::next(m.vertices().begin())) = Point(third * third * third, 1e300 / Kernel::FT(7), 0);
+  const Soup s = mesh_to_soup(m);
+  CHECK(s.points[0][0] == 1.0 / 3);
+  CHECK(s.points[0][1] == -2.0 / 3);
+  CHECK(s.points[0][2] == 0.1 / 3);
+  CHECK(s.points[1][0] == 1.0 / 27);
+  CHECK(s.points[1][1] == 1e300 / 7);
+}

@@ -1,5 +1,7 @@
 #include "polyheal/mesh/convert.h"
 
+#include <cstring>
+#include <type_traits>
 #include <unordered_map>
 
 #include "polyheal/mesh/topology.h"
@@ -14,6 +16,21 @@ std::string faces_of(const Edge& e) {
   return s;
 }
 std::string edge_name(const Edge& e) { return "edge (" + std::to_string(e.a) + ", " + std::to_string(e.b) + ")"; }
+
+/// The double nearest to the exact value of x (ties to even). CGAL::to_double
+/// on a lazy number is only guaranteed to a relative precision of 1e-5.
+double nearest_double(const Kernel::FT& x) {
+  const auto& e = x.exact();
+  const std::pair<double, double> iv = CGAL::to_interval(e);  // tight: equal or adjacent doubles
+  if (iv.first == iv.second) return iv.first;
+  using ET = std::decay_t<decltype(e)>;
+  const ET mid = (ET(iv.first) + ET(iv.second)) / 2;
+  if (e < mid) return iv.first;
+  if (mid < e) return iv.second;
+  std::uint64_t bits;
+  std::memcpy(&bits, &iv.first, sizeof bits);
+  return (bits & 1) == 0 ? iv.first : iv.second;
+}
 
 }  // namespace
 
@@ -65,7 +82,7 @@ Soup mesh_to_soup(const Mesh& mesh) {
   for (vertex_descriptor v : mesh.vertices()) {
     id[static_cast<std::uint32_t>(v)] = static_cast<Index>(s.points.size());
     const Point& p = mesh.point(v);
-    s.points.push_back({CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())});
+    s.points.push_back({nearest_double(p.x()), nearest_double(p.y()), nearest_double(p.z())});
   }
   for (face_descriptor f : mesh.faces()) {
     std::vector<Index> face;

@@ -21,8 +21,9 @@ struct MeshBuildResult {
 /// lists every problem. Each face's input id goes to the kFaceOrigin property.
 MeshBuildResult soup_to_mesh(const Soup& soup, Mesh& mesh);
 
-/// The mesh as a soup, exact coordinates rounded to double (certify after
-/// rounding: check the result, not the mesh). Vertices are renumbered densely.
+/// The mesh as a soup, each exact coordinate rounded to the nearest double
+/// (ties to even; certify after rounding: check the result, not the mesh).
+/// Vertices are renumbered densely.
 Soup mesh_to_soup(const Mesh& mesh);
 
 }  // namespace polyheal
