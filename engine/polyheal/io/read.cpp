@@ -339,23 +339,31 @@ Soup parse_obj(std::string_view bytes, const std::string& name) {
 // ---------------------------------------------------------------------------
 // STL
 
-/// Adds a triangle, welding its corners on identical coordinates.
-struct StlWelder {
-  Soup& soup;
-  std::unordered_map<std::string, Index> ids;
-  Index id(const Point3d& p) {
-    Point3d q{p[0] + 0.0, p[1] + 0.0, p[2] + 0.0};  // +0.0 and -0.0 are one point
-    std::string key(reinterpret_cast<const char*>(q.data()), sizeof q);
-    auto [it, inserted] = ids.emplace(std::move(key), static_cast<Index>(soup.points.size()));
-    if (inserted) soup.points.push_back(p);
-    return it->second;
+/// STL stores every triangle's corners separately: weld the corners that have
+/// identical coordinates (+0.0 and -0.0 are one point) and number the points
+/// in order of first appearance.
+Soup weld_stl_corners(std::vector<Point3d>&& corners) {
+  const Weld weld = weld_identical_points(corners);
+  Soup s;
+  std::vector<Index> id(corners.size());
+  s.points.reserve(corners.size() - weld.merged);
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    if (weld.representative[i] == i) {
+      id[i] = static_cast<Index>(s.points.size());
+      s.points.push_back(corners[i]);
+    } else {
+      id[i] = id[weld.representative[i]];
+    }
   }
-};
+  s.indices = std::move(id);
+  s.offsets.resize(corners.size() / 3 + 1);
+  for (std::size_t f = 0; f < s.offsets.size(); ++f) s.offsets[f] = 3 * f;
+  return s;
+}
 
 Soup parse_stl_ascii(std::string_view bytes, const std::string& name) {
   Text t{bytes.data(), bytes.data() + bytes.size(), 1, name};
-  Soup s;
-  StlWelder weld{s, {}};
+  std::vector<Point3d> corners;
   auto expect = [&](std::string_view word) {
     t.skip_empty_lines();
     std::string_view got = t.token();
@@ -381,10 +389,9 @@ Soup parse_stl_ascii(std::string_view bytes, const std::string& name) {
       t.next_line();  // normal: ignored, recomputed from the vertices when needed
       expect("outer");
       t.next_line();
-      Index c[3];
       for (int k = 0; k < 3; ++k) {
         expect("vertex");
-        c[k] = weld.id({t.number("coordinate"), t.number("coordinate"), t.number("coordinate")});
+        corners.push_back({t.number("coordinate"), t.number("coordinate"), t.number("coordinate")});
         if (!t.at_eol()) t.fail("extra data after vertex coordinates");
         t.next_line();
       }
@@ -393,11 +400,10 @@ Soup parse_stl_ascii(std::string_view bytes, const std::string& name) {
       t.next_line();
       expect("endfacet");
       t.next_line();
-      s.add_triangle(c[0], c[1], c[2]);
     }
   }
   if (!any_solid) t.fail("no 'solid' in ASCII STL");
-  return s;
+  return weld_stl_corners(std::move(corners));
 }
 
 template <class T>
@@ -410,29 +416,19 @@ T load_le(const char* p) {
 Soup parse_stl_binary(std::string_view bytes, const std::string& name) {
   const std::uint32_t n = load_le<std::uint32_t>(bytes.data() + 80);
   if (3ull * n > kMaxVertices) throw InputError(name, "byte 80", too_many_vertices(3ull * n));
-  Soup s;
-  StlWelder weld{s, {}};
-  weld.ids.reserve(n / 2 + 1);
-  s.points.reserve(n / 2 + 3);
-  s.indices.reserve(3ull * n);
-  s.offsets.reserve(n + 1ull);
+  std::vector<Point3d> corners(3ull * n);
   for (std::uint32_t f = 0; f < n; ++f) {
     const char* rec = bytes.data() + 84 + 50ull * f;
-    Index c[3];
-    for (int k = 0; k < 3; ++k) {
-      Point3d p;
+    for (int k = 0; k < 3; ++k)
       for (int a = 0; a < 3; ++a) {
-        float x = load_le<float>(rec + 12 + 12 * k + 4 * a);
+        const float x = load_le<float>(rec + 12 + 12 * k + 4 * a);
         if (!std::isfinite(x))
           throw InputError(name, "byte " + std::to_string(84 + 50ull * f + 12 + 12 * k + 4 * a),
                            "non-finite coordinate in triangle " + std::to_string(f));
-        p[a] = static_cast<double>(x);
+        corners[3ull * f + k][a] = static_cast<double>(x);
       }
-      c[k] = weld.id(p);
-    }
-    s.add_triangle(c[0], c[1], c[2]);
   }
-  return s;
+  return weld_stl_corners(std::move(corners));
 }
 
 bool looks_ascii_stl(std::string_view bytes) {
