@@ -50,7 +50,7 @@ for f in "${inputs[@]}"; do
     rows+="| $name | $faces | $pairs / — | $ph_par s, $((ph_par_mem / 1024)) MB | $ph_seq s | cannot read it | cannot read it | — |"$'\n'
   else
     cg_pairs=${cg_par_split##* }
-    ratio=$(awk "BEGIN{printf \"%.1fx\", $cg_par / $ph_par}")
+    ratio=$(awk "BEGIN{b = $cg_seq < $cg_par ? $cg_seq : $cg_par; printf \"%.1fx\", b / $ph_par}")
     rows+="| $name | $faces | $pairs / $cg_pairs | $ph_par s, $((ph_par_mem / 1024)) MB | $ph_seq s | $cg_seq s (read ${cg_seq_split%% *} s) | $cg_par s, $((cg_par_mem / 1024)) MB | $ratio |"$'\n'
   fi
   echo "$name: polyheal $ph_par s (seq $ph_seq s), CGAL $cg_par s (seq $cg_seq s)" >&2
@@ -75,7 +75,8 @@ process, peak resident memory from \`/usr/bin/time\`). Do not edit by hand.
 
 polyheal's column is read + the full exact report (topology, degenerate/cap/needle
 classification, TetGen tolerances, every self-intersecting pair); CGAL's is read +
-self-intersection pairs only. "pairs" is polyheal's count / CGAL's count. Ratio = CGAL parallel / polyheal parallel.
+self-intersection pairs only. "pairs" is polyheal's count / CGAL's count.
+Ratio = CGAL's faster mode (sequential or parallel) / polyheal with 2 threads.
 
 | input | faces | pairs (ours / CGAL) | polyheal (2 threads) | polyheal --sequential | CGAL sequential | CGAL parallel | ratio |
 | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |
