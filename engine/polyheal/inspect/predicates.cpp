@@ -1,4 +1,5 @@
 #include "polyheal/inspect/predicates.h"
+#include "polyheal/inspect/exact_predicates.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Exact_rational.h>
@@ -117,7 +118,41 @@ bool angle_at(const Point3d& apex, const Point3d& b, const Point3d& c, double co
   return decide(dot_sign, test_sign, cos_threshold);
 }
 
+/// The classification, shared by double and exact points: collinear first,
+/// then any cap angle, then any needle angle.
+template <class P, class Collinear, class Greater, class Less>
+Shape classify_with(const P& a, const P& b, const P& c, Collinear collinear, Greater greater, Less less) {
+  if (collinear(a, b, c)) return Shape::degenerate;
+  const P* p[3] = {&a, &b, &c};
+  for (int k = 0; k < 3; ++k)
+    if (greater(*p[k], *p[(k + 1) % 3], *p[(k + 2) % 3])) return Shape::cap;
+  for (int k = 0; k < 3; ++k)
+    if (less(*p[k], *p[(k + 1) % 3], *p[(k + 2) % 3])) return Shape::needle;
+  return Shape::fine;
+}
+
 }  // namespace
+
+Shape classify_triangle(const Point3d& a, const Point3d& b, const Point3d& c, double cos_cap, double cos_needle) {
+  return classify_with(
+      a, b, c, is_collinear,
+      [&](const Point3d& x, const Point3d& y, const Point3d& z) { return angle_greater(x, y, z, cos_cap); },
+      [&](const Point3d& x, const Point3d& y, const Point3d& z) { return angle_less(x, y, z, cos_needle); });
+}
+
+Shape classify_triangle(const Point& a, const Point& b, const Point& c, double cos_cap, double cos_needle) {
+  using FT = Kernel::FT;
+  auto sub = [](const Point& x, const Point& y) { return Vec<FT>{x.x() - y.x(), x.y() - y.y(), x.z() - y.z()}; };
+  auto decide = [&](const Point& apex, const Point& y, const Point& z, double c, auto from_signs) {
+    const auto [dot_sign, test_sign] = angle_signs(sub(y, apex), sub(z, apex), c);
+    return from_signs(dot_sign, test_sign, c);
+  };
+  return classify_with(
+      a, b, c, [](const Point& x, const Point& y, const Point& z) { return CGAL::collinear(x, y, z); },
+      [&](const Point& x, const Point& y, const Point& z) { return decide(x, y, z, cos_cap, greater_from_signs); },
+      [&](const Point& x, const Point& y, const Point& z) { return decide(x, y, z, cos_needle, less_from_signs); });
+}
+
 
 bool is_collinear(const Point3d& a, const Point3d& b, const Point3d& c) {
   using P = CGAL::Epick::Point_3;

@@ -11,6 +11,14 @@
 
 namespace polyheal {
 
+/// Botsch & Kobbelt §2 classes of a triangle. A cap has an angle above the cap
+/// threshold; a needle an angle below the needle threshold and no cap angle;
+/// a degenerate triangle has exactly collinear (or repeated) corners.
+enum class Shape : char { fine, degenerate, cap, needle };
+
+/// Classifies triangle abc exactly; thresholds enter as cosines.
+Shape classify_triangle(const Point3d& a, const Point3d& b, const Point3d& c, double cos_cap, double cos_needle);
+
 /// True when a, b, c are exactly collinear (including repeated points).
 bool is_collinear(const Point3d& a, const Point3d& b, const Point3d& c);
 

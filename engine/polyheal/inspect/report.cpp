@@ -25,19 +25,6 @@ EdgeRef ref(const Edge& e) {
   return r;
 }
 
-enum class Shape : char { fine, degenerate, cap, needle };
-
-/// Botsch & Kobbelt §2 classification of one triangle, exactly.
-Shape classify(const Point3d& a, const Point3d& b, const Point3d& c, double cos_cap, double cos_needle) {
-  if (is_collinear(a, b, c)) return Shape::degenerate;
-  const Point3d* p[3] = {&a, &b, &c};
-  for (int k = 0; k < 3; ++k)
-    if (angle_greater(*p[k], *p[(k + 1) % 3], *p[(k + 2) % 3], cos_cap)) return Shape::cap;
-  for (int k = 0; k < 3; ++k)
-    if (angle_less(*p[k], *p[(k + 1) % 3], *p[(k + 2) % 3], cos_needle)) return Shape::needle;
-  return Shape::fine;
-}
-
 constexpr double kPi = 3.14159265358979323846;
 
 void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions& o, Report& r);
@@ -113,7 +100,7 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
     Shape worst = Shape::fine;
     for (std::size_t k = 1; k + 1 < v.size(); ++k) {
       const Point3d &a = soup.points[v[0]], &b = soup.points[v[k]], &c = soup.points[v[k + 1]];
-      const Shape s = classify(a, b, c, cos_cap, cos_needle);
+      const Shape s = classify_triangle(a, b, c, cos_cap, cos_needle);
       if (s != Shape::fine && (worst == Shape::fine || s < worst)) worst = s;
       if (s != Shape::degenerate && is_nearly_degenerate(a, b, c, o.tetgen_epsilon)) near_degenerate[f] = 1;
     }
