@@ -154,6 +154,37 @@ Shape classify_triangle(const Point& a, const Point& b, const Point& c, double c
 }
 
 
+bool angle_to_plane_less(const Kernel::Vector_3& e, const Kernel::Vector_3& n, double sin_threshold) {
+  // angle(e, plane) < d  <=>  |cos(e, n)| < sin d  <=>  (e.n)^2 - sin^2 d |e|^2 |n|^2 < 0
+  using FT = Kernel::FT;
+  const auto test_sign =
+      angle_signs(Vec<FT>{e.x(), e.y(), e.z()}, Vec<FT>{n.x(), n.y(), n.z()}, sin_threshold).second;
+  return test_sign < 0;
+}
+
+std::size_t largest_angle_corner(const std::vector<Point>& polygon) {
+  using FT = Kernel::FT;
+  const std::size_t n = polygon.size();
+  // cos(angle k) = d_k / sqrt(l_k): compare without square roots.
+  std::vector<FT> d(n), l(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const Kernel::Vector_3 u = polygon[(k + n - 1) % n] - polygon[k], v = polygon[(k + 1) % n] - polygon[k];
+    d[k] = u * v;
+    l[k] = u.squared_length() * v.squared_length();
+  }
+  auto cos_less = [&](std::size_t i, std::size_t j) {
+    const CGAL::Sign si = CGAL::sign(d[i]), sj = CGAL::sign(d[j]);
+    if (si != sj) return si < sj;
+    if (si == CGAL::ZERO) return false;
+    const FT a = d[i] * d[i] * l[j], b = d[j] * d[j] * l[i];  // cos_i^2 vs cos_j^2, scaled
+    return si == CGAL::POSITIVE ? a < b : b < a;
+  };
+  std::size_t best = 0;
+  for (std::size_t k = 1; k < n; ++k)
+    if (cos_less(k, best)) best = k;
+  return best;
+}
+
 bool is_collinear(const Point3d& a, const Point3d& b, const Point3d& c) {
   using P = CGAL::Epick::Point_3;
   return CGAL::collinear(P(a[0], a[1], a[2]), P(b[0], b[1], b[2]), P(c[0], c[1], c[2]));

@@ -1,0 +1,206 @@
+#include "polyheal/repair/detail/plane_slice.h"
+
+#include <CGAL/boost/graph/Euler_operations.h>
+
+#include <cmath>
+#include <algorithm>
+#include <deque>
+
+#include "polyheal/inspect/exact_predicates.h"
+
+namespace polyheal::detail {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+class Slicer {
+ public:
+  Slicer(Mesh& mesh, const Kernel::Plane_3& plane, const SliceOptions& o)
+      : mesh_(mesh), plane_(plane), o_(o), origin_(mesh.property_map<face_descriptor, std::int64_t>(kFaceOrigin)) {}
+
+  SliceResult run() {
+    classify_vertices();
+    apply_safeguard();
+    const std::vector<face_descriptor> faces = faces_to_cut();
+    split_crossed_edges(faces);
+    for (face_descriptor f : faces) cut_face(f);
+    return std::move(result_);
+  }
+
+ private:
+  int side(vertex_descriptor v) const { return side_[static_cast<std::size_t>(v)]; }
+  bool crossing(halfedge_descriptor h) const { return side(mesh_.source(h)) * side(mesh_.target(h)) < 0; }
+  bool is_cut(face_descriptor f) const {
+    bool above = false, below = false;
+    for (vertex_descriptor v : CGAL::vertices_around_face(mesh_.halfedge(f), mesh_)) {
+      above |= side(v) > 0;
+      below |= side(v) < 0;
+    }
+    return above && below;
+  }
+  Kernel::FT height(const Point& p) const {
+    return plane_.a() * p.x() + plane_.b() * p.y() + plane_.c() * p.z() + plane_.d();
+  }
+
+  // §4, first pass: above / below / on, exactly; epsilon snapping.
+  void classify_vertices() {
+    side_.assign(mesh_.num_vertices(), 0);
+    protected_.assign(mesh_.num_vertices(), 0);
+    for (vertex_descriptor v : o_.protected_vertices) protected_[static_cast<std::size_t>(v)] = 1;
+    const Kernel::FT eps2 = Kernel::FT(o_.snap_distance) * Kernel::FT(o_.snap_distance);
+    for (vertex_descriptor v : mesh_.vertices()) {
+      const Point& p = mesh_.point(v);
+      int s = static_cast<int>(plane_.oriented_side(p));
+      if (s != 0 && o_.snap_distance > 0 && !protected_[static_cast<std::size_t>(v)] &&
+          CGAL::squared_distance(p, plane_) <= eps2) {
+        s = 0;
+        ++result_.vertices_snapped;
+      }
+      side_[static_cast<std::size_t>(v)] = static_cast<signed char>(s);
+    }
+  }
+
+  // §4 safeguard: a crossing edge nearly parallel to the plane gets one
+  // endpoint (the nearer, never a protected one) snapped onto the plane.
+  // Snapping only removes crossings, so one pass over the edges suffices.
+  void apply_safeguard() {
+    const double sin_bound = std::sin((180.0 - o_.cap_angle) * kPi / 180.0);
+    const Kernel::Vector_3 n = plane_.orthogonal_vector();
+    for (auto e : mesh_.edges()) {
+      const halfedge_descriptor h = mesh_.halfedge(e);
+      if (!crossing(h)) continue;
+      const vertex_descriptor u = mesh_.source(h), v = mesh_.target(h);
+      if (!angle_to_plane_less(mesh_.point(v) - mesh_.point(u), n, sin_bound)) continue;
+      const bool pu = protected_[static_cast<std::size_t>(u)], pv = protected_[static_cast<std::size_t>(v)];
+      if (pu && pv) continue;  // both ends protected: left to the caller's verification
+      vertex_descriptor w;
+      if (pu) w = v;
+      else if (pv) w = u;
+      else w = CGAL::squared_distance(mesh_.point(u), plane_) <= CGAL::squared_distance(mesh_.point(v), plane_) ? u : v;
+      side_[static_cast<std::size_t>(w)] = 0;
+      ++result_.vertices_snapped;
+    }
+  }
+
+  // Global: every cut face. Local: the connected cut curve through the seed,
+  // followed across crossed edges and around on-plane vertices.
+  std::vector<face_descriptor> faces_to_cut() const {
+    std::vector<face_descriptor> out;
+    if (o_.seed == Mesh::null_face()) {
+      for (face_descriptor f : mesh_.faces())
+        if (is_cut(f)) out.push_back(f);
+      return out;
+    }
+    if (!is_cut(o_.seed)) return out;
+    std::vector<char> seen(mesh_.num_faces(), 0);
+    std::deque<face_descriptor> queue{o_.seed};
+    seen[static_cast<std::size_t>(o_.seed)] = 1;
+    auto visit = [&](face_descriptor g) {
+      if (g != Mesh::null_face() && !seen[static_cast<std::size_t>(g)] && is_cut(g)) {
+        seen[static_cast<std::size_t>(g)] = 1;
+        queue.push_back(g);
+      }
+    };
+    while (!queue.empty()) {
+      const face_descriptor f = queue.front();
+      queue.pop_front();
+      out.push_back(f);
+      for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_)) {
+        if (crossing(h)) visit(mesh_.face(mesh_.opposite(h)));
+        if (side(mesh_.target(h)) == 0)
+          for (face_descriptor g : CGAL::faces_around_target(h, mesh_)) visit(g);
+      }
+    }
+    return out;
+  }
+
+  // §4, second pass: split each crossed edge at its exact intersection point.
+  void split_crossed_edges(const std::vector<face_descriptor>& faces) {
+    std::vector<Mesh::Edge_index> crossed;  // an edge between two cut faces is seen twice
+    for (face_descriptor f : faces)
+      for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_))
+        if (crossing(h)) crossed.push_back(mesh_.edge(h));
+    std::sort(crossed.begin(), crossed.end());
+    crossed.erase(std::unique(crossed.begin(), crossed.end()), crossed.end());
+    for (Mesh::Edge_index e : crossed) {
+      const halfedge_descriptor h = mesh_.halfedge(e);
+      const Point& p = mesh_.point(mesh_.source(h));
+      const Point& q = mesh_.point(mesh_.target(h));
+      const Kernel::FT hp = height(p), hq = height(q);
+      const Point x = p + (hp / (hp - hq)) * (q - p);  // exact: on the plane and on pq
+      const halfedge_descriptor hn = CGAL::Euler::split_edge(h, mesh_);
+      const vertex_descriptor vx = mesh_.target(hn);
+      mesh_.point(vx) = x;
+      if (static_cast<std::size_t>(vx) >= side_.size()) {
+        side_.resize(static_cast<std::size_t>(vx) + 1, 0);
+        protected_.resize(static_cast<std::size_t>(vx) + 1, 0);
+      }
+      side_[static_cast<std::size_t>(vx)] = 0;
+      ++result_.edges_split;
+    }
+  }
+
+  // Splits a cut face (now a 4- or 5-gon) between its two on-plane corners,
+  // then each quad by the diagonal through its largest angle.
+  void cut_face(face_descriptor f) {
+    std::vector<halfedge_descriptor> on;
+    for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_))
+      if (side(mesh_.target(h)) == 0) on.push_back(h);
+    if (on.size() != 2 || mesh_.next(on[0]) == on[1] || mesh_.next(on[1]) == on[0]) return;  // not a cut triangle
+    const halfedge_descriptor h = CGAL::Euler::split_face(on[0], on[1], mesh_);
+    ++result_.faces_cut;
+    const face_descriptor g = mesh_.face(mesh_.opposite(h));
+    inherit(g, f);
+    for (face_descriptor piece : {f, g}) triangulate_quad(piece, f);
+  }
+
+  void triangulate_quad(face_descriptor piece, face_descriptor parent) {
+    std::vector<halfedge_descriptor> hs;
+    std::vector<Point> corners;
+    for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(piece), mesh_)) {
+      hs.push_back(h);
+      corners.push_back(mesh_.point(mesh_.target(h)));
+    }
+    if (hs.size() == 4) {
+      const std::size_t k = largest_angle_corner(corners);
+      const halfedge_descriptor d = CGAL::Euler::split_face(hs[k], hs[(k + 2) % 4], mesh_);
+      const face_descriptor other = mesh_.face(mesh_.opposite(d));
+      inherit(other, parent);
+      result_.faces.push_back(other);
+    }
+    result_.faces.push_back(piece);
+  }
+
+  void inherit(face_descriptor child, face_descriptor parent) {
+    if (origin_.second) origin_.first[child] = origin_.first[parent];
+  }
+
+  Mesh& mesh_;
+  const Kernel::Plane_3& plane_;
+  const SliceOptions& o_;
+  std::pair<Mesh::Property_map<face_descriptor, std::int64_t>, bool> origin_;
+  std::vector<signed char> side_;
+  std::vector<char> protected_;
+  SliceResult result_;
+};
+
+}  // namespace
+
+SliceResult slice_by_plane(Mesh& mesh, const Kernel::Plane_3& plane, const SliceOptions& options) {
+  return Slicer(mesh, plane, options).run();
+}
+
+Kernel::Plane_3 cap_plane(const Mesh& mesh, face_descriptor cap, SliceOptions& options) {
+  std::vector<vertex_descriptor> v;
+  std::vector<Point> p;
+  for (vertex_descriptor w : CGAL::vertices_around_face(mesh.halfedge(cap), mesh)) {
+    v.push_back(w);
+    p.push_back(mesh.point(w));
+  }
+  const std::size_t a = largest_angle_corner(p), b = (a + 1) % 3, c = (a + 2) % 3;
+  options.protected_vertices.push_back(v[b]);
+  options.protected_vertices.push_back(v[c]);
+  return Kernel::Plane_3(p[a], p[c] - p[b]);
+}
+
+}  // namespace polyheal::detail

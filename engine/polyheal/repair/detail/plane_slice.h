@@ -1,0 +1,65 @@
+// polyheal — cutting the working mesh by a plane (Botsch & Kobbelt §4).
+//
+// Vertices are classified above / below / on the plane exactly (Epeck), with
+// two kinds of snapping onto the plane (classification only: no vertex moves):
+//   - epsilon snapping: a vertex within `snap_distance` of the plane;
+//   - the safeguard (§4): a crossing edge at an angle below 180° - cap_angle
+//     to the plane would give its split point an angle above cap_angle, so
+//     one endpoint of it (never a protected vertex) snaps onto the plane.
+// Crossed edges are split at their exact intersection point and every cut
+// triangle is split into two or three triangles:
+//
+//        a                      a            one vertex on each side:  (a, x, y) and
+//       / \                    / \           the quad (x, b, c, y), split by the
+//      x---y   <- plane       x---y          diagonal through its largest angle
+//     /     \                / \   \
+//    b-------c              b---`---c
+//
+// Why no cap is created: a crossing edge at angle alpha to the plane makes
+// angles of at most 180° - alpha at its split point, and the safeguard keeps
+// alpha >= 180° - cap_angle; angles at original vertices only shrink; a quad's
+// diagonal runs through its largest angle, so every triangle angle is part of,
+// or equal to, a quad angle that was bounded. Where a split runs to an
+// epsilon-snapped vertex off the plane this bound is approximate, so callers
+// verify with the oracle (exact_predicates.h) before accepting a slice.
+//
+// Precondition: a triangle mesh. Postcondition: a triangle mesh with the same
+// surface point set (faces are subdivided, nothing moves), so no
+// self-intersection is created; face provenance (kFaceOrigin) is inherited.
+#pragma once
+
+#include <vector>
+
+#include "polyheal/mesh/mesh.h"
+
+namespace polyheal::detail {
+
+struct SliceOptions {
+  double snap_distance = 0.0;  // model units; vertices this close to the plane count as on it
+  double cap_angle = 175.0;    // degrees; the safeguard keeps split points below this angle
+  std::vector<vertex_descriptor> protected_vertices;  // never snapped (a cap's long-edge ends)
+  /// Local mode: only the connected piece of the cut curve through this face
+  /// (both faces of every split edge lie on it, so the mesh stays consistent).
+  /// Null: the whole mesh (the paper's global slice).
+  face_descriptor seed = Mesh::null_face();
+};
+
+struct SliceResult {
+  std::size_t vertices_snapped = 0;  // by epsilon or by the safeguard
+  std::size_t edges_split = 0;
+  std::size_t faces_cut = 0;
+  std::vector<face_descriptor> faces;  // every face created or reshaped
+};
+
+SliceResult slice_by_plane(Mesh& mesh, const Kernel::Plane_3& plane, const SliceOptions& options);
+
+/// §3: the plane that eliminates cap `cap` — through its obtuse vertex A,
+/// perpendicular to its longest edge BC — with B and C added to
+/// `options.protected_vertices` so that the slice really splits BC:
+///
+///          A                  A on the plane, x = foot of A on BC:
+///   B ------------- C         (B, x, A) and (x, C, A) have a right angle at x
+///
+Kernel::Plane_3 cap_plane(const Mesh& mesh, face_descriptor cap, SliceOptions& options);
+
+}  // namespace polyheal::detail
