@@ -1,13 +1,13 @@
 #include "polyheal/inspect/report.h"
 
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
 #include <chrono>
 #include <cmath>
 #include <limits>
 
+#include "polyheal/inspect/detail/parallel.h"
 #include "polyheal/inspect/predicates.h"
 #include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/weld.h"
@@ -106,12 +106,7 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
     }
     shape[f] = worst;
   };
-  if (o.parallel)
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, r.faces, 4096), [&](const auto& range) {
-      for (std::size_t f = range.begin(); f != range.end(); ++f) classify_face(f);
-    });
-  else
-    for (std::size_t f = 0; f < r.faces; ++f) classify_face(f);
+  detail::for_each_index(r.faces, o.parallel, classify_face);
   for (std::size_t f = 0; f < r.faces; ++f) {
     if (shape[f] == Shape::degenerate) r.degenerate_faces.push_back(f);
     if (shape[f] == Shape::cap) r.caps.push_back(f);
@@ -137,18 +132,11 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
                            cos_fold);
   };
   tbb::enumerable_thread_specific<std::vector<FacePair>> folds;
-  auto fold_range = [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i != end; ++i) {
-      const Topology::InteriorEdge& e = topo.interior_edges[i];
-      if (sharp_fold(e))
-        folds.local().push_back({std::min<std::size_t>(e.face0, e.face1), std::max<std::size_t>(e.face0, e.face1)});
-    }
-  };
-  if (o.parallel)
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo.interior_edges.size(), 8192),
-                      [&](const auto& range) { fold_range(range.begin(), range.end()); });
-  else
-    fold_range(0, topo.interior_edges.size());
+  detail::for_each_index(topo.interior_edges.size(), o.parallel, [&](std::size_t i) {
+    const Topology::InteriorEdge& e = topo.interior_edges[i];
+    if (sharp_fold(e))
+      folds.local().push_back({std::min<std::size_t>(e.face0, e.face1), std::max<std::size_t>(e.face0, e.face1)});
+  });
   for (const auto& v : folds) r.sharp_folds.insert(r.sharp_folds.end(), v.begin(), v.end());
   std::sort(r.sharp_folds.begin(), r.sharp_folds.end());
 

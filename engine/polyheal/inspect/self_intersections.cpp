@@ -6,9 +6,9 @@
 
 #include <CGAL/box_intersection_d.h>
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
+#include "polyheal/inspect/detail/parallel.h"
 #include "polyheal/inspect/detail/triangle_pair.h"
 
 namespace polyheal {
@@ -49,16 +49,10 @@ Tri exact_triangle(const Soup& s, const FanTriangle& t, bool degenerate) {
 /// Degeneracy (exact collinearity) of each triangle, decided once, in parallel.
 std::vector<char> degenerate_flags(const Soup& s, const std::vector<FanTriangle>& tris, bool parallel) {
   std::vector<char> out(tris.size());
-  auto decide = [&](std::size_t i) {
+  detail::for_each_index(tris.size(), parallel, [&](std::size_t i) {
     const FanTriangle& t = tris[i];
     out[i] = CGAL::collinear(point(s, t.v[0]), point(s, t.v[1]), point(s, t.v[2]));
-  };
-  if (parallel)
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tris.size(), 8192), [&](const auto& r) {
-      for (std::size_t i = r.begin(); i != r.end(); ++i) decide(i);
-    });
-  else
-    for (std::size_t i = 0; i < tris.size(); ++i) decide(i);
+  });
   return out;
 }
 
