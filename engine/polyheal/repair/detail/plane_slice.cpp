@@ -2,8 +2,9 @@
 
 #include <CGAL/boost/graph/Euler_operations.h>
 
-#include <cmath>
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <deque>
 
 #include "polyheal/inspect/exact_predicates.h"
@@ -22,6 +23,10 @@ class Slicer {
     classify_vertices();
     apply_safeguard();
     const std::vector<face_descriptor> faces = faces_to_cut();
+    if (o_.verify && !plan_is_safe(faces)) {
+      result_.rejected = true;
+      return std::move(result_);
+    }
     split_crossed_edges(faces);
     for (face_descriptor f : faces) cut_face(f);
     return std::move(result_);
@@ -114,6 +119,64 @@ class Slicer {
     return out;
   }
 
+  // The pieces cut_face() will make, computed without touching the mesh, each
+  // classified exactly: a slice whose snapped vertices lie off the plane can
+  // make a cap (or a zero-area piece) after all, and is then refused whole.
+  bool plan_is_safe(const std::vector<face_descriptor>& faces) const {
+    const double cos_cap = std::cos(o_.cap_angle * kPi / 180.0);
+    std::vector<Point> poly;
+    std::vector<char> on;
+    for (face_descriptor f : faces) {
+      poly.clear();
+      on.clear();
+      for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_)) {
+        if (crossing(h)) {
+          poly.push_back(split_point(h));
+          on.push_back(1);
+        }
+        poly.push_back(mesh_.point(mesh_.target(h)));
+        on.push_back(side(mesh_.target(h)) == 0);
+      }
+      std::vector<std::size_t> cut;
+      for (std::size_t k = 0; k < poly.size(); ++k)
+        if (on[k]) cut.push_back(k);
+      const std::size_t n = poly.size();
+      // A piece of a cap may stay a cap (the face was one already; another
+      // slice removes it); a cap piece of a face that was not a cap is new.
+      const int parent_caps = classify_face(mesh_, f, cos_cap, 1.0) == Shape::cap ? 1 : 0;
+      int caps = 0;
+      if (cut.size() != 2 || (cut[0] + 1) % n == cut[1] || (cut[1] + 1) % n == cut[0]) continue;
+      for (auto [from, to] : {std::pair{cut[0], cut[1]}, std::pair{cut[1], cut[0]}}) {
+        std::vector<Point> piece;
+        for (std::size_t k = from;; k = (k + 1) % n) {
+          piece.push_back(poly[k]);
+          if (k == to) break;
+        }
+        for (const auto& t : triangulation(piece)) {
+          const Shape s = classify_triangle(t[0], t[1], t[2], cos_cap, 1.0);
+          if (s == Shape::degenerate) return false;
+          if (s == Shape::cap && ++caps > parent_caps) return false;
+        }
+      }
+    }
+    return true;
+  }
+
+  /// A piece (triangle or quad) as triangles, the quad split by the diagonal
+  /// through its largest angle — the rule triangulate_quad() applies.
+  static std::vector<std::array<Point, 3>> triangulation(const std::vector<Point>& piece) {
+    if (piece.size() == 3) return {{piece[0], piece[1], piece[2]}};
+    const std::size_t k = largest_angle_corner(piece);
+    return {{piece[k], piece[(k + 1) % 4], piece[(k + 2) % 4]}, {piece[(k + 2) % 4], piece[(k + 3) % 4], piece[k]}};
+  }
+
+  Point split_point(halfedge_descriptor h) const {
+    const Point& p = mesh_.point(mesh_.source(h));
+    const Point& q = mesh_.point(mesh_.target(h));
+    const Kernel::FT hp = height(p), hq = height(q);
+    return p + (hp / (hp - hq)) * (q - p);  // exact: on the plane and on pq
+  }
+
   // §4, second pass: split each crossed edge at its exact intersection point.
   void split_crossed_edges(const std::vector<face_descriptor>& faces) {
     std::vector<Mesh::Edge_index> crossed;  // an edge between two cut faces is seen twice
@@ -124,10 +187,7 @@ class Slicer {
     crossed.erase(std::unique(crossed.begin(), crossed.end()), crossed.end());
     for (Mesh::Edge_index e : crossed) {
       const halfedge_descriptor h = mesh_.halfedge(e);
-      const Point& p = mesh_.point(mesh_.source(h));
-      const Point& q = mesh_.point(mesh_.target(h));
-      const Kernel::FT hp = height(p), hq = height(q);
-      const Point x = p + (hp / (hp - hq)) * (q - p);  // exact: on the plane and on pq
+      const Point x = split_point(h);
       const halfedge_descriptor hn = CGAL::Euler::split_edge(h, mesh_);
       const vertex_descriptor vx = mesh_.target(hn);
       mesh_.point(vx) = x;

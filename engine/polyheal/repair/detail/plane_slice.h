@@ -42,12 +42,19 @@ struct SliceOptions {
   /// (both faces of every split edge lie on it, so the mesh stays consistent).
   /// Null: the whole mesh (the paper's global slice).
   face_descriptor seed = Mesh::null_face();
+  /// Compute every piece first and refuse the slice (mesh untouched) when a
+  /// face that is not a cap would leave a cap piece, a cap would leave two,
+  /// or a piece would have zero area — possible only through snapping, whose
+  /// vertices are off the plane by up to snap_distance or, for the
+  /// safeguard, up to |e| sin(180° - cap_angle).
+  bool verify = true;
 };
 
 struct SliceResult {
   std::size_t vertices_snapped = 0;  // by epsilon or by the safeguard
   std::size_t edges_split = 0;
   std::size_t faces_cut = 0;
+  bool rejected = false;  // verify found a would-be cap; nothing was changed
   std::vector<face_descriptor> faces;  // every face created or reshaped
 };
 
