@@ -10,5 +10,7 @@ enum Exit : int { kClean = 0, kDefects = 1, kError = 2 };
 
 /// Adds `check` to `app`; on run, stores the command's exit code in `exit_code`.
 void add_check(CLI::App& app, int& exit_code);
+/// Adds `degenerate` (Botsch & Kobbelt degenerate-face removal).
+void add_degenerate(CLI::App& app, int& exit_code);
 
 }  // namespace polyheal::cli

@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "polyheal 0.1.0");
   int exit_code = kError;
   add_check(app, exit_code);
+  add_degenerate(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -21,7 +21,7 @@ TEST_CASE("convert: a closed tetrahedron becomes a valid mesh with provenance", 
   REQUIRE(r.ok);
   CHECK(m.number_of_faces() == 4);
   CHECK(m.is_valid(false));
-  auto origin = m.property_map<face_descriptor, std::int64_t>(kFaceOrigin).first;
+  auto origin = *face_origin_map(m);
   std::int64_t sum = 0;
   for (face_descriptor f : m.faces()) sum += origin[f];
   CHECK(sum == 0 + 1 + 2 + 3);

@@ -40,7 +40,7 @@ struct SliceStats {
 /// Removes every cap, one slice at a time, checking the §4 guarantees after
 /// each slice. Returns the number of slices and the final face count.
 SliceStats slice_all_caps(Mesh& m, bool local) {
-  auto origin = m.property_map<face_descriptor, std::int64_t>(kFaceOrigin).first;
+  auto origin = *face_origin_map(m);
   std::map<std::int64_t, std::array<Point, 3>> birth;  // input triangles
   for (face_descriptor f : m.faces()) {
     std::array<Point, 3> t;

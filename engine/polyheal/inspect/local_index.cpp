@@ -119,8 +119,35 @@ struct LocalIndex::Impl {
   static bool any_pair_intersects(const std::vector<Tri>& a, const std::vector<Tri>& b) {
     for (const Tri& x : a)
       for (const Tri& y : b)
-        if (detail::faces_intersect<Kernel>(x, y)) return true;
+        if (pair_intersects(x, y)) return true;
     return false;
+  }
+
+  /// The exact test, on InputKernel when all six points are doubles (the
+  /// same answer, much cheaper on the coplanar pairs CAD meshes are full of).
+  static bool pair_intersects(const Tri& x, const Tri& y) {
+    const bool doubles = std::all_of(x.p.begin(), x.p.end(), is_double_point) &&
+                         std::all_of(y.p.begin(), y.p.end(), is_double_point);
+    if (!doubles) return detail::faces_intersect<Kernel>(x, y);
+    auto input = [](const Tri& t) {
+      return detail::Tri<InputKernel>{{to_input_point(t.p[0]), to_input_point(t.p[1]), to_input_point(t.p[2])},
+                                      t.id, t.degenerate};
+    };
+    return detail::faces_intersect<InputKernel>(input(x), input(y));
+  }
+
+  /// Indexed faces whose cells b overlaps, sorted and unique.
+  void candidates_of(const CGAL::Bbox_3& b, std::vector<std::uint32_t>& out) const {
+    out.assign(oversize_faces.begin(), oversize_faces.end());
+    const bool fits = for_each_cell(b, [&](const CellKey& k) {
+      auto it = cells.find(k);
+      if (it != cells.end()) out.insert(out.end(), it->second.begin(), it->second.end());
+    });
+    if (!fits)  // a huge query box: every indexed face
+      for (std::uint32_t g = 0; g < indexed.size(); ++g)
+        if (indexed[g]) out.push_back(g);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
   }
 
   /// Calls found(f, g) for each intersecting pair; stops when it returns false.
@@ -134,16 +161,7 @@ struct LocalIndex::Impl {
       const std::uint32_t i = static_cast<std::uint32_t>(f);
       const CGAL::Bbox_3 b = bbox_of(f);
       const std::vector<Tri> tf = triangles(f);
-      candidates.assign(oversize_faces.begin(), oversize_faces.end());
-      const bool fits = for_each_cell(b, [&](const CellKey& k) {
-        auto it = cells.find(k);
-        if (it != cells.end()) candidates.insert(candidates.end(), it->second.begin(), it->second.end());
-      });
-      if (!fits)  // a huge query face: test against every indexed face
-        for (std::uint32_t g = 0; g < indexed.size(); ++g)
-          if (indexed[g]) candidates.push_back(g);
-      std::sort(candidates.begin(), candidates.end());
-      candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+      candidates_of(b, candidates);
       for (std::uint32_t j : candidates) {
         if (j == i) continue;
         if (j < i && std::binary_search(asked.begin(), asked.end(), j)) continue;  // reported from j's side
@@ -192,6 +210,34 @@ bool LocalIndex::intersects(const std::vector<face_descriptor>& faces) const {
     return false;
   });
   return any;
+}
+
+bool LocalIndex::would_intersect(const std::vector<std::array<vertex_descriptor, 3>>& proposed,
+                                 const std::vector<face_descriptor>& replaced) const {
+  const Mesh& mesh = impl_->mesh;
+  std::vector<std::uint32_t> skip;
+  for (face_descriptor f : replaced) skip.push_back(static_cast<std::uint32_t>(f));
+  std::sort(skip.begin(), skip.end());
+  std::vector<std::vector<Tri>> tris;
+  std::vector<CGAL::Bbox_3> boxes;
+  for (const auto& t : proposed) {
+    const Point &a = mesh.point(t[0]), &b = mesh.point(t[1]), &c = mesh.point(t[2]);
+    tris.push_back({detail::make_tri<Kernel>(a, b, c, static_cast<std::uint32_t>(t[0]),
+                                             static_cast<std::uint32_t>(t[1]), static_cast<std::uint32_t>(t[2]))});
+    boxes.push_back(a.bbox() + b.bbox() + c.bbox());
+  }
+  for (std::size_t i = 0; i < tris.size(); ++i)
+    for (std::size_t j = i + 1; j < tris.size(); ++j)
+      if (CGAL::do_overlap(boxes[i], boxes[j]) && Impl::any_pair_intersects(tris[i], tris[j])) return true;
+  std::vector<std::uint32_t> candidates;
+  for (std::size_t i = 0; i < tris.size(); ++i) {
+    impl_->candidates_of(boxes[i], candidates);
+    for (std::uint32_t g : candidates) {
+      if (std::binary_search(skip.begin(), skip.end(), g) || !CGAL::do_overlap(boxes[i], impl_->box[g])) continue;
+      if (Impl::any_pair_intersects(tris[i], impl_->triangles(face_descriptor(g)))) return true;
+    }
+  }
+  return false;
 }
 
 std::size_t LocalIndex::size() const { return impl_->count; }

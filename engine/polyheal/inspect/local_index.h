@@ -16,6 +16,7 @@
 //   if (index.intersections(changed_faces).empty()) accept();
 #pragma once
 
+#include <array>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -43,6 +44,13 @@ class LocalIndex {
       const std::vector<face_descriptor>& faces) const;
   /// Early-exit form.
   bool intersects(const std::vector<face_descriptor>& faces) const;
+
+  /// A proposed edit, asked before making it: would triangles `proposed`
+  /// (vertex triples of the mesh, in their current positions) intersect each
+  /// other or an indexed face not listed in `replaced` (the faces the edit
+  /// removes or reshapes)? Same semantics as intersections().
+  bool would_intersect(const std::vector<std::array<vertex_descriptor, 3>>& proposed,
+                       const std::vector<face_descriptor>& replaced) const;
 
   std::size_t size() const;
 

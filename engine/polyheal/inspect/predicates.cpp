@@ -141,6 +141,10 @@ Shape classify_triangle(const Point3d& a, const Point3d& b, const Point3d& c, do
 }
 
 Shape classify_triangle(const Point& a, const Point& b, const Point& c, double cos_cap, double cos_needle) {
+  if (is_double_point(a) && is_double_point(b) && is_double_point(c)) {  // the cheaper exact path
+    auto d = [](const Point& p) { const auto q = to_input_point(p); return Point3d{q.x(), q.y(), q.z()}; };
+    return classify_triangle(d(a), d(b), d(c), cos_cap, cos_needle);
+  }
   using FT = Kernel::FT;
   auto sub = [](const Point& x, const Point& y) { return Vec<FT>{x.x() - y.x(), x.y() - y.y(), x.z() - y.z()}; };
   auto decide = [&](const Point& apex, const Point& y, const Point& z, double c, auto from_signs) {

@@ -29,6 +29,14 @@ class InputError : public std::runtime_error {
   std::string file_, position_, reason_;
 };
 
+/// Well-formed input that a command does not handle (a non-manifold soup
+/// given to a command that needs a mesh). The message names the first
+/// problem; the CLI prefixes the file name and exits 2.
+class UnsupportedInput : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// Failure to write an output file (permissions, disk full, refusal to
 /// overwrite the input). The target file is left untouched.
 class OutputError : public std::runtime_error {

@@ -11,6 +11,9 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
 
+#include <cstdint>
+#include <optional>
+
 namespace polyheal {
 
 using Kernel = CGAL::Epeck;        // working kernel: exact constructions
@@ -25,5 +28,37 @@ using halfedge_descriptor = Mesh::Halfedge_index;
 /// Name of the face property holding the input face id (-1: face created by
 /// polyheal). Every operation keeps it up to date (STYLE.md habit 6).
 inline constexpr const char* kFaceOrigin = "f:polyheal_origin";
+
+/// True when p's exact coordinates are doubles (its interval approximation
+/// is a point): input vertices, not constructed ones. Predicates on such
+/// points may run on InputKernel, whose exact fallback (Mpzf) is far cheaper
+/// than the lazy kernel's rationals.
+inline bool is_double_point(const Point& p) {
+  const auto& a = p.approx();
+  return a.x().is_point() && a.y().is_point() && a.z().is_point();
+}
+inline InputKernel::Point_3 to_input_point(const Point& p) {
+  const auto& a = p.approx();
+  return {a.x().inf(), a.y().inf(), a.z().inf()};
+}
+
+using FaceOriginMap = Mesh::Property_map<face_descriptor, std::int64_t>;
+
+/// Name of the face property (char) marking faces that lie in the input
+/// surface: input faces and the pieces slicing cuts them into. Repairs that
+/// reshape a face clear it (the tolerance bookkeeping of shape_decimation).
+inline constexpr const char* kFaceOnInput = "f:polyheal_on_input";
+using FaceFlagMap = Mesh::Property_map<face_descriptor, char>;
+
+/// The on-input map of `mesh`, added (every face on the input) if missing.
+inline FaceFlagMap face_on_input_map(Mesh& mesh) { return mesh.add_property_map<face_descriptor, char>(kFaceOnInput, 1).first; }
+
+/// The face-origin map of `mesh`, if it has one. (The one place that spells
+/// Surface_mesh::property_map, whose return type changed after CGAL 5.5.)
+inline std::optional<FaceOriginMap> face_origin_map(const Mesh& mesh) {
+  const auto [map, found] = mesh.property_map<face_descriptor, std::int64_t>(kFaceOrigin);
+  if (!found) return std::nullopt;
+  return map;
+}
 
 }  // namespace polyheal

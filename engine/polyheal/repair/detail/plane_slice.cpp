@@ -17,7 +17,7 @@ constexpr double kPi = 3.14159265358979323846;
 class Slicer {
  public:
   Slicer(Mesh& mesh, const Kernel::Plane_3& plane, const SliceOptions& o)
-      : mesh_(mesh), plane_(plane), o_(o), origin_(mesh.property_map<face_descriptor, std::int64_t>(kFaceOrigin)) {}
+      : mesh_(mesh), plane_(plane), o_(o), origin_(face_origin_map(mesh)), on_input_(face_on_input_map(mesh)) {}
 
   SliceResult run() {
     classify_vertices();
@@ -196,6 +196,7 @@ class Slicer {
         protected_.resize(static_cast<std::size_t>(vx) + 1, 0);
       }
       side_[static_cast<std::size_t>(vx)] = 0;
+      result_.vertices.push_back(vx);
       ++result_.edges_split;
     }
   }
@@ -232,13 +233,15 @@ class Slicer {
   }
 
   void inherit(face_descriptor child, face_descriptor parent) {
-    if (origin_.second) origin_.first[child] = origin_.first[parent];
+    if (origin_) (*origin_)[child] = (*origin_)[parent];
+    on_input_[child] = on_input_[parent];
   }
 
   Mesh& mesh_;
   const Kernel::Plane_3& plane_;
   const SliceOptions& o_;
-  std::pair<Mesh::Property_map<face_descriptor, std::int64_t>, bool> origin_;
+  std::optional<FaceOriginMap> origin_;
+  FaceFlagMap on_input_;
   std::vector<signed char> side_;
   std::vector<char> protected_;
   SliceResult result_;

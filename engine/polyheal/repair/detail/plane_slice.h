@@ -25,7 +25,8 @@
 //
 // Precondition: a triangle mesh. Postcondition: a triangle mesh with the same
 // surface point set (faces are subdivided, nothing moves), so no
-// self-intersection is created; face provenance (kFaceOrigin) is inherited.
+// self-intersection is created; face provenance (kFaceOrigin) and the
+// on-input flag (kFaceOnInput) are inherited.
 #pragma once
 
 #include <vector>
@@ -56,6 +57,7 @@ struct SliceResult {
   std::size_t faces_cut = 0;
   bool rejected = false;  // verify found a would-be cap; nothing was changed
   std::vector<face_descriptor> faces;  // every face created or reshaped
+  std::vector<vertex_descriptor> vertices;  // the split points
 };
 
 SliceResult slice_by_plane(Mesh& mesh, const Kernel::Plane_3& plane, const SliceOptions& options);

@@ -1,0 +1,369 @@
+#include "polyheal/repair/degenerate.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+
+#include "polyheal/inspect/exact_predicates.h"
+#include "polyheal/inspect/local_index.h"
+#include "polyheal/mesh/convert.h"
+#include "polyheal/mesh/errors.h"
+#include "polyheal/mesh/weld.h"
+#include "polyheal/repair/detail/distance.h"
+#include "polyheal/repair/detail/plane_slice.h"
+#include "polyheal/repair/detail/shape_decimation.h"
+
+namespace polyheal {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+Point rounded(const Point& p) { return Point(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())); }
+
+ShapeCounts shape_counts(const Report& r) { return {r.degenerate_faces.size(), r.caps.size(), r.needles.size()}; }
+
+SurfaceTopology topology_of(const Report& r) {
+  SurfaceTopology t;
+  const long used = long(r.vertices) - long(r.isolated_vertices) - long(r.merged_identical_vertices);
+  std::size_t corners = 0;  // every face is a triangle here; count anyway
+  corners = 3 * r.faces + r.non_triangle_faces * 0;
+  const long edges = (long(corners) + long(r.boundary_edges.size())) / 2;
+  t.euler = used - edges + long(r.faces);
+  t.components = r.components;
+  t.boundary_loops = r.boundary_loops;
+  t.manifold = r.manifold && r.oriented;
+  return t;
+}
+
+InspectOptions inspect_options(const DegenerateOptions& o) {
+  InspectOptions io;
+  io.cap_angle = o.cap_angle;
+  io.needle_angle = o.needle_angle;
+  return io;
+}
+
+/// Stage 1: identical points welded, faces with a repeated index dropped.
+Soup preprocess(const Soup& input, std::size_t& dropped) {
+  const Weld weld = weld_identical_points(input.points);
+  const Soup welded = weld.merged ? apply_weld(input, weld) : input;
+  Soup out;
+  out.points = welded.points;
+  dropped = 0;
+  for (std::size_t f = 0; f < welded.face_count(); ++f) {
+    const FaceView face = welded.face(f);
+    std::vector<Index> ids(face.begin(), face.end());
+    std::sort(ids.begin(), ids.end());
+    if (std::adjacent_find(ids.begin(), ids.end()) != ids.end()) {
+      ++dropped;
+      continue;
+    }
+    out.add_face(face.begin(), face.end());
+  }
+  return out;
+}
+
+/// The working mesh, with all machinery of stages 2-4.
+class Pipeline {
+ public:
+  Pipeline(Mesh& mesh, const detail::SurfaceDistance& input, const DegenerateOptions& o, DegenerateReport& r)
+      : mesh_(mesh), o_(o), r_(r), index_(mesh), decimator_(mesh, index_, input, decimation_options(o, r)) {
+    cos_cap_ = std::cos(o.cap_angle * kPi / 180.0);
+    cos_needle_ = std::cos(o.needle_angle * kPi / 180.0);
+    snap_ = 0.1 * r.tolerance;
+  }
+
+  std::vector<face_descriptor> faces_of(Shape shape) const {
+    std::vector<face_descriptor> out;
+    for (face_descriptor f : mesh_.faces())
+      if (classify_face(mesh_, f, cos_cap_, cos_needle_) == shape) out.push_back(f);
+    return out;
+  }
+  std::vector<face_descriptor> bad_faces() const {
+    std::vector<face_descriptor> out;
+    for (face_descriptor f : mesh_.faces())
+      if (decimator_.is_bad(f)) out.push_back(f);
+    return out;
+  }
+
+  void decimate(const std::vector<face_descriptor>& faces) {
+    decimator_.run(faces);
+    note_size();
+  }
+
+  /// §5 supersampling: three stacks of n evenly spaced axis-aligned planes.
+  /// A refused plane is retried at small shifts within its cell.
+  void slice_grid(int n) {
+    CGAL::Bbox_3 box;
+    for (vertex_descriptor v : mesh_.vertices()) box += mesh_.point(v).bbox();
+    for (int axis = 0; axis < 3; ++axis) {
+      const double lo = box.min(axis), hi = box.max(axis), step = (hi - lo) / (n + 1);
+      if (!(step > 0)) continue;
+      for (int i = 1; i <= n; ++i) {
+        bool done = false;
+        for (double shift : {0.0, 0.1, -0.1, 0.2, -0.2, 0.3, -0.3}) {
+          const double at = lo + (i + shift) * step;
+          std::array<double, 3> normal{0, 0, 0};
+          normal[axis] = 1;
+          const Kernel::Plane_3 plane{Kernel::FT(normal[0]), Kernel::FT(normal[1]), Kernel::FT(normal[2]),
+                                      -Kernel::FT(at)};
+          detail::SliceOptions so;
+          so.snap_distance = snap_;
+          so.cap_angle = o_.cap_angle;
+          const detail::SliceResult s = detail::slice_by_plane(mesh_, plane, so);
+          if (s.rejected) continue;
+          after_slice(s);
+          done = true;
+          break;
+        }
+        ++(done ? r_.grid_slices : r_.grid_slices_refused);
+      }
+    }
+  }
+
+  /// §3-4: one slice per cap, until every cap is gone or refused.
+  /// Returns the number of caps removed.
+  std::size_t slice_caps() {
+    std::size_t removed = 0;
+    std::vector<face_descriptor> queue = faces_of(Shape::cap);
+    std::vector<char> refused(mesh_.number_of_faces() + 1, 0);
+    const std::size_t total = queue.size();
+    for (std::size_t k = 0; k < queue.size(); ++k) {
+      const face_descriptor cap = queue[k];
+      if (o_.observer && total > 0) o_.observer->progress(std::min(1.0, double(k) / double(total)));
+      if (mesh_.is_removed(cap) || classify_face(mesh_, cap, cos_cap_, cos_needle_) != Shape::cap) continue;
+      if (static_cast<std::size_t>(cap) < refused.size() && refused[static_cast<std::size_t>(cap)]) continue;
+      detail::SliceOptions so;
+      so.snap_distance = snap_;
+      so.cap_angle = o_.cap_angle;
+      if (!o_.global_slices) so.seed = cap;
+      const Kernel::Plane_3 plane = detail::cap_plane(mesh_, cap, so);
+      const detail::SliceResult s = detail::slice_by_plane(mesh_, plane, so);
+      if (s.rejected) {
+        ++r_.cap_slices_refused;
+        if (static_cast<std::size_t>(cap) >= refused.size()) refused.resize(static_cast<std::size_t>(cap) + 1, 0);
+        refused[static_cast<std::size_t>(cap)] = 1;
+        continue;
+      }
+      ++r_.cap_slices;
+      ++removed;
+      after_slice(s);
+      for (face_descriptor f : s.faces)  // a cut cap may leave a cap piece (never more caps)
+        if (classify_face(mesh_, f, cos_cap_, cos_needle_) == Shape::cap) queue.push_back(f);
+      if (o_.interleave) tidy(s);
+    }
+    return removed;
+  }
+
+  /// §5 supersampling where it is needed: a needle that no collapse or flip
+  /// within the tolerance removes (the side of a thin strip: its long edges
+  /// run along the strip, its short one across) is cut by the plane through
+  /// the midpoint of its longest edge, perpendicular to it. The cut adds
+  /// points on both sides of the strip, halving the triangles' length; the
+  /// decimation right after it uses them, and removes the cut's other points
+  /// where they are not needed. At most `budget` slices. Returns the number
+  /// of slices made.
+  std::size_t slice_needles(std::size_t budget) {
+    std::size_t made = 0;
+    for (face_descriptor needle : faces_of(Shape::needle)) {
+      if (made >= budget) break;
+      if (mesh_.is_removed(needle) || classify_face(mesh_, needle, cos_cap_, cos_needle_) != Shape::needle) continue;
+      halfedge_descriptor longest = mesh_.halfedge(needle);
+      Kernel::FT best = -1;
+      for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(needle), mesh_)) {
+        const Kernel::FT l = CGAL::squared_distance(mesh_.point(mesh_.source(h)), mesh_.point(mesh_.target(h)));
+        if (l > best) {
+          best = l;
+          longest = h;
+        }
+      }
+      // Where exactly the cut runs does not matter, so the plane is put
+      // through double approximations: its split points stay one exact
+      // construction deep instead of nesting rationals slice after slice.
+      const Point p = rounded(mesh_.point(mesh_.source(longest)));
+      const Point q = rounded(mesh_.point(mesh_.target(longest)));
+      const Point mid(CGAL::to_double(CGAL::midpoint(p, q).x()), CGAL::to_double(CGAL::midpoint(p, q).y()),
+                      CGAL::to_double(CGAL::midpoint(p, q).z()));
+      if (p == q) continue;
+      detail::SliceOptions so;
+      so.snap_distance = snap_;
+      so.cap_angle = o_.cap_angle;
+      so.seed = needle;
+      so.protected_vertices = {mesh_.source(longest), mesh_.target(longest)};
+      const detail::SliceResult s = detail::slice_by_plane(mesh_, Kernel::Plane_3(mid, q - p), so);
+      if (s.rejected || s.edges_split == 0) {
+        ++r_.needle_slices_refused;
+        continue;
+      }
+      ++r_.needle_slices;
+      ++made;
+      after_slice(s);
+      tidy(s);
+    }
+    return made;
+  }
+
+  void finish_stats() {
+    r_.collapses = decimator_.stats().collapses;
+    r_.flips = decimator_.stats().flips;
+  }
+
+  void note_size() { r_.peak_faces = std::max<std::size_t>(r_.peak_faces, mesh_.number_of_faces()); }
+
+ private:
+  static detail::DecimationOptions decimation_options(const DegenerateOptions& o, const DegenerateReport& r) {
+    detail::DecimationOptions d;
+    d.cap_angle = o.cap_angle;
+    d.needle_angle = o.needle_angle;
+    d.tolerance = r.tolerance;
+    return d;
+  }
+
+  void after_slice(const detail::SliceResult& s) {
+    index_.update(s.faces);
+    decimator_.reattach(s.faces);
+    note_size();
+  }
+
+  /// Decimation along a slice: its bad pieces first, then its split points
+  /// wherever removing them leaves only fine faces.
+  void tidy(const detail::SliceResult& s) {
+    std::vector<face_descriptor> faces;
+    for (face_descriptor f : s.faces)
+      if (!mesh_.is_removed(f)) faces.push_back(f);
+    decimator_.run(faces, s.vertices);
+    note_size();
+    decimator_.simplify(s.vertices);
+  }
+
+  Mesh& mesh_;
+  const DegenerateOptions& o_;
+  DegenerateReport& r_;
+  LocalIndex index_;
+  detail::ShapeDecimator decimator_;
+  double cos_cap_ = 0, cos_needle_ = 0, snap_ = 0;
+};
+
+}  // namespace
+
+DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOptions& o) {
+  DegenerateResult result;
+  DegenerateReport& r = result.report;
+  r.cap_angle = o.cap_angle;
+  r.needle_angle = o.needle_angle;
+  r.slice_grid = o.slice_grid;
+  r.global_slices = o.global_slices;
+  r.interleave = o.interleave;
+  r.faces_in = input.face_count();
+
+  // 1. preprocess
+  auto t0 = std::chrono::steady_clock::now();
+  if (o.observer) o.observer->stage("inspecting input");
+  const Report in = inspect(input, inspect_options(o));
+  r.before = shape_counts(in);
+  r.self_intersections_in = in.self_intersections.size();
+  const Soup clean = preprocess(input, r.repeated_index_faces);
+  r.topology_in = r.repeated_index_faces ? topology_of(inspect(clean, inspect_options(o))) : topology_of(in);
+  const double dx = in.bbox_max[0] - in.bbox_min[0], dy = in.bbox_max[1] - in.bbox_min[1],
+               dz = in.bbox_max[2] - in.bbox_min[2];
+  r.bbox_diagonal = std::sqrt(dx * dx + dy * dy + dz * dz);
+  r.tolerance = o.tolerance >= 0 ? o.tolerance : o.tolerance_ratio * r.bbox_diagonal;
+  if (!clean.is_triangle_soup()) throw UnsupportedInput("not a triangle mesh (polygons with more than 3 corners)");
+  Mesh mesh;
+  const MeshBuildResult built = soup_to_mesh(clean, mesh);
+  if (!built.ok)
+    throw UnsupportedInput("not an oriented 2-manifold mesh: " + built.problems.front() +
+                           (built.problems.size() > 1 ? " (and " + std::to_string(built.problems.size() - 1) +
+                                                            " more problems)"
+                                                      : ""));
+  const detail::SurfaceDistance distance(clean);
+  Pipeline pipeline(mesh, distance, o, r);
+  r.seconds_preprocess = seconds_since(t0);
+  pipeline.note_size();
+
+  // 2. zero-area faces
+  t0 = std::chrono::steady_clock::now();
+  if (o.observer) o.observer->stage("zero-area faces");
+  pipeline.decimate(pipeline.faces_of(Shape::degenerate));
+  r.faces_after_zero_area = mesh.number_of_faces();
+  r.seconds_zero_area = seconds_since(t0);
+
+  // 3. slicing
+  t0 = std::chrono::steady_clock::now();
+  if (o.observer) o.observer->stage("slicing caps");
+  if (o.slice_grid > 0) pipeline.slice_grid(o.slice_grid);
+  pipeline.slice_caps();
+  r.faces_after_slicing = mesh.number_of_faces();
+  r.seconds_slicing = seconds_since(t0);
+
+  // 4. decimation; caps whose slice was refused may be sliceable once their
+  // neighbourhood changed, so alternate while slicing makes progress
+  t0 = std::chrono::steady_clock::now();
+  if (o.observer) o.observer->stage("decimating needles");
+  pipeline.decimate(pipeline.bad_faces());
+  // What decimation could not remove: caps whose slice was refused may be
+  // sliceable now that their neighbourhood changed; stuck needles get local
+  // supersampling. Bounded: slices per round at most twice the bad faces
+  // left (plus a constant), and a few rounds.
+  for (int round = 0; round < 6; ++round) {
+    const std::size_t bad = pipeline.bad_faces().size();
+    if (bad == 0) break;
+    const std::size_t made = pipeline.slice_caps() + pipeline.slice_needles(2 * bad + 16);
+    pipeline.decimate(pipeline.bad_faces());
+    if (made == 0) break;
+  }
+  pipeline.finish_stats();
+  r.seconds_decimation = seconds_since(t0);
+
+  // 5. round and certify
+  t0 = std::chrono::steady_clock::now();
+  if (o.observer) o.observer->stage("certifying");
+  const double cos_cap = std::cos(o.cap_angle * kPi / 180.0), cos_needle = std::cos(o.needle_angle * kPi / 180.0);
+  for (face_descriptor f : mesh.faces())  // mesh_to_soup keeps this face order
+    r.exact_bad.push_back(classify_face(mesh, f, cos_cap, cos_needle) != Shape::fine);
+  result.soup = mesh_to_soup(mesh);
+  if (o.certify) certify(input, result.soup, r);
+  r.seconds_certify = seconds_since(t0);
+  return result;
+}
+
+void certify(const Soup& input, const Soup& written, DegenerateReport& r) {
+  std::size_t dropped = 0;
+  const Soup clean = preprocess(input, dropped);
+  InspectOptions io;
+  io.cap_angle = r.cap_angle;
+  io.needle_angle = r.needle_angle;
+  const Report out = inspect(written, io);
+  r.faces_out = out.faces;
+  r.after = shape_counts(out);
+  r.self_intersections_out = out.self_intersections.size();
+  r.topology_out = topology_of(out);
+  r.leftovers.clear();
+  auto why = [&](std::size_t f, const char* unfixable) {
+    const bool rounding = f < r.exact_bad.size() && !r.exact_bad[f];
+    return std::string(rounding ? "made by rounding exact coordinates to doubles" : unfixable);
+  };
+  for (std::size_t f : out.degenerate_faces)
+    r.leftovers.push_back({f, "zero-area", why(f, "no flip or collapse within the tolerance is valid")});
+  for (std::size_t f : out.caps)
+    r.leftovers.push_back({f, "cap", why(f, "its slice would create a cap, and no flip or collapse within the "
+                                            "tolerance is valid")});
+  for (std::size_t f : out.needles)
+    r.leftovers.push_back({f, "needle", why(f, "no collapse or flip within the tolerance keeps the surface "
+                                               "manifold, cap-free and intersection-free")});
+  std::sort(r.leftovers.begin(), r.leftovers.end(), [](const Leftover& a, const Leftover& b) { return a.face < b.face; });
+  // CGAL's bounded-error Hausdorff: the true distance is within the error
+  // bound of the estimate, so the certificate requires estimate + bound.
+  const double error_bound = 0.3 * r.tolerance;
+  r.hausdorff = detail::hausdorff_distance(clean, written, error_bound);
+  r.hausdorff_error_bound = error_bound;
+  r.certified = r.after.total() == 0 && r.topology_out == r.topology_in &&
+                r.self_intersections_out <= r.self_intersections_in && r.hausdorff >= 0 &&
+                r.hausdorff + error_bound <= r.tolerance;
+}
+
+}  // namespace polyheal

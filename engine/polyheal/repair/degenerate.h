@@ -1,0 +1,132 @@
+// polyheal — removing degenerate faces: Botsch & Kobbelt, "A Robust
+// Procedure to Eliminate Degenerate Faces from Triangle Meshes" (VMV 2001).
+//
+// The pipeline (`polyheal degenerate`), stage by stage:
+//   1. preprocess   weld identical points; remove faces with a repeated
+//                   vertex index topologically; build the exact working mesh
+//                   (Surface_mesh<Epeck>). A non-manifold soup is refused.
+//   2. zero-area    exactly collinear faces go by edge flip or collapse
+//                   (detail/shape_decimation.h).
+//   3. slicing      optional supersampling by three stacks of axis-aligned
+//                   planes (§5, --slice-grid); then every cap is cut by the
+//                   plane through its obtuse vertex perpendicular to its
+//                   longest edge (§3-4, detail/plane_slice.h). Each slice's
+//                   pieces are classified exactly before it is made, and a
+//                   slice that would leave more caps is refused, so every
+//                   accepted slice removes a cap and creates none. By default
+//                   a slice is limited to the connected cut curve through the
+//                   cap (local mode); --global-slices cuts the whole mesh as
+//                   the paper does. By default the needles a slice leaves are
+//                   decimated right after it (the paper's §7 future work:
+//                   "decimating along the intersection curve after each
+//                   slicing").
+//   4. decimation   needles and whatever slicing could not remove go by
+//                   collapses and flips within the tolerance (§5). A needle
+//                   no operation can remove (the side of a thin strip) gets
+//                   local supersampling: a slice across it through the
+//                   midpoint of its longest edge, then decimation again.
+//   5. certify      the exact mesh is rounded to doubles; certify() checks
+//                   the written soup with the oracle: shapes, topology,
+//                   self-intersections, Hausdorff distance to the input.
+//
+// Nothing moves: vertices keep their exact input coordinates; slicing adds
+// points on the input surface; collapses keep the surviving vertex in place.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "polyheal/inspect/report.h"
+#include "polyheal/mesh/soup.h"
+#include "polyheal/observer.h"
+
+namespace polyheal {
+
+struct DegenerateOptions {
+  double cap_angle = 175.0;      // degrees: a face with a larger angle is a cap
+  double needle_angle = 5.0;     // degrees: a face with a smaller angle is a needle
+  double tolerance = -1.0;       // model units; negative: tolerance_ratio x bbox diagonal
+  double tolerance_ratio = 1e-3;
+  int slice_grid = 0;            // N: three stacks of N axis-aligned planes first (§5)
+  bool global_slices = false;    // the paper's global slices instead of local ones
+  bool interleave = true;        // decimate along each slice right after it
+  bool certify = true;           // certify the rounded result (callers that certify the written file say false)
+  Observer* observer = nullptr;
+};
+
+/// Zero-area faces, caps and needles of a soup (Botsch & Kobbelt §2).
+struct ShapeCounts {
+  std::size_t zero_area = 0, caps = 0, needles = 0;
+  std::size_t total() const { return zero_area + caps + needles; }
+};
+
+/// A bad face left in the output, by its index in the output file.
+struct Leftover {
+  std::size_t face = 0;
+  std::string shape;   // "zero-area", "cap", "needle"
+  std::string reason;
+};
+
+/// Topological invariants compared between input and output.
+struct SurfaceTopology {
+  long euler = 0;                // V - E + F
+  std::size_t components = 0, boundary_loops = 0;
+  bool manifold = false;
+  bool operator==(const SurfaceTopology& o) const {
+    return euler == o.euler && components == o.components && boundary_loops == o.boundary_loops &&
+           manifold == o.manifold;
+  }
+};
+
+struct DegenerateReport {
+  // parameters as used
+  double cap_angle = 0, needle_angle = 0, tolerance = 0, bbox_diagonal = 0;
+  int slice_grid = 0;
+  bool global_slices = false, interleave = true;
+  // input
+  std::size_t faces_in = 0, repeated_index_faces = 0;
+  ShapeCounts before;
+  std::size_t self_intersections_in = 0;
+  SurfaceTopology topology_in;
+  // stages
+  std::size_t faces_after_zero_area = 0, faces_after_slicing = 0, faces_out = 0;
+  std::size_t peak_faces = 0;  // the largest intermediate mesh
+  std::size_t grid_slices = 0, grid_slices_refused = 0;
+  std::size_t cap_slices = 0, cap_slices_refused = 0;
+  std::size_t needle_slices = 0, needle_slices_refused = 0;
+  std::size_t collapses = 0, flips = 0;
+  double seconds_preprocess = 0, seconds_zero_area = 0, seconds_slicing = 0, seconds_decimation = 0,
+         seconds_certify = 0;
+  // output, filled by certify() on the soup as written
+  ShapeCounts after;
+  std::vector<Leftover> leftovers;
+  std::size_t self_intersections_out = 0;
+  SurfaceTopology topology_out;
+  double hausdorff = 0;  // symmetric, to the input surface (-1: not measured)
+  double hausdorff_error_bound = 0;  // the true distance is within this of `hausdorff`
+  bool certified = false;  // see certify()
+
+  /// Faces of the output (in order) that were bad already in the exact mesh,
+  /// before rounding; certify() uses it to say why a face is left.
+  std::vector<char> exact_bad;
+};
+
+struct DegenerateResult {
+  Soup soup;  // the output, rounded to doubles
+  DegenerateReport report;
+};
+
+/// Runs stages 1-4 and, with options.certify, certifies the rounded result
+/// (stage 5).
+/// Throws UnsupportedInput for a soup that is not an oriented 2-manifold.
+DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOptions& options = {});
+
+/// Stage 5 on `written` (the output as read back from disk; `input` as given
+/// to remove_degenerate_faces): fills the
+/// output half of `report`. certified = no zero-area face, cap or needle;
+/// topology unchanged; no self-intersection unless the input had as many;
+/// Hausdorff distance within the tolerance.
+void certify(const Soup& input, const Soup& written, DegenerateReport& report);
+
+}  // namespace polyheal

@@ -1,0 +1,182 @@
+#include "polyheal/repair/detail/distance.h"
+
+#include "polyheal/mesh/mesh.h"
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <iterator>
+#include <limits>
+#include <vector>
+
+namespace polyheal::detail {
+namespace {
+
+using K = InputKernel;
+using Triangles = std::vector<K::Triangle_3>;
+using Primitive = CGAL::AABB_triangle_primitive<K, Triangles::const_iterator>;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+
+K::Point_3 point(const Point3d& p) { return K::Point_3(p[0], p[1], p[2]); }
+
+using Corners = std::array<Point3d, 3>;
+
+/// A triangle's corners in a canonical rotation (the smallest first), so
+/// that the same face in two files compares equal.
+Corners canonical(const Point3d& a, const Point3d& b, const Point3d& c) {
+  Corners t{a, b, c};
+  std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+  return t;
+}
+
+std::vector<Corners> triangles_of(const Soup& soup) {
+  std::vector<Corners> out;
+  for (std::size_t f = 0; f < soup.face_count(); ++f) {
+    const FaceView face = soup.face(f);
+    for (std::size_t k = 1; k + 1 < face.size(); ++k)
+      out.push_back(canonical(soup.points[face[0]], soup.points[face[k]], soup.points[face[k + 1]]));
+  }
+  return out;
+}
+
+double norm(const Point3d& a, const Point3d& b) {
+  const double x = a[0] - b[0], y = a[1] - b[1], z = a[2] - b[2];
+  return std::sqrt(x * x + y * y + z * z);
+}
+
+/// One-sided Hausdorff distance from triangles `from` to the surface `to`,
+/// as a lower bound h with the true value in [h, h + error_bound].
+///
+/// The distance to a surface is 1-Lipschitz, so on a triangle with corner
+/// distances d_i and longest edge l every point is within min_i d_i + l of
+/// `to`. A triangle whose bound does not exceed the largest distance seen so
+/// far (plus the error bound) is done; otherwise its longest edge is
+/// bisected (long thin triangles split along their length only).
+double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, double error_bound) {
+  struct Piece {
+    Corners p;
+    std::array<double, 3> d;
+  };
+  auto dist = [&](const Point3d& p) { return std::sqrt(to.squared_distance(p)); };
+  // Upper bound on a piece: for each candidate triangle of `to` (the ones
+  // nearest its corners and centroid), the largest corner distance to it.
+  auto upper_bound = [&](const Piece& piece) {
+    Point3d c;
+    for (int k = 0; k < 3; ++k) c[k] = (piece.p[0][k] + piece.p[1][k] + piece.p[2][k]) / 3.0;
+    double best = std::numeric_limits<double>::infinity();
+    for (const Point3d& q : {c, piece.p[0], piece.p[1], piece.p[2]}) {
+      const std::size_t t = to.nearest_triangle(q);
+      double m = 0;
+      for (const Point3d& v : piece.p) m = std::max(m, to.squared_distance_to(v, t));
+      best = std::min(best, m);
+      if (best == 0) break;
+    }
+    return std::sqrt(best);
+  };
+  double lower = 0.0;
+  std::vector<Piece> stack;
+  for (const Corners& t : from) {
+    Piece piece{t, {dist(t[0]), dist(t[1]), dist(t[2])}};
+    lower = std::max({lower, piece.d[0], piece.d[1], piece.d[2]});
+    stack.push_back(piece);
+  }
+  while (!stack.empty()) {
+    const Piece piece = stack.back();
+    stack.pop_back();
+    const std::array<double, 3> edge{norm(piece.p[1], piece.p[2]), norm(piece.p[2], piece.p[0]),
+                                     norm(piece.p[0], piece.p[1])};  // edge k is opposite corner k
+    const int k = static_cast<int>(std::max_element(edge.begin(), edge.end()) - edge.begin());
+    // 1-Lipschitz bound first (cheap), then the convexity bound
+    if (*std::min_element(piece.d.begin(), piece.d.end()) + edge[k] <= lower + error_bound) continue;
+    if (upper_bound(piece) <= lower + error_bound) continue;
+    const int i = (k + 1) % 3, j = (k + 2) % 3;  // the longest edge runs from corner i to corner j
+    Point3d m;
+    for (int c = 0; c < 3; ++c) m[c] = 0.5 * (piece.p[i][c] + piece.p[j][c]);
+    if (m == piece.p[i] || m == piece.p[j]) continue;  // no double left between them
+    const double dm = dist(m);
+    lower = std::max(lower, dm);
+    Piece a = piece, b = piece;
+    a.p[j] = m;
+    a.d[j] = dm;
+    b.p[i] = m;
+    b.d[i] = dm;
+    stack.push_back(a);
+    stack.push_back(b);
+  }
+  return lower;
+}
+
+Soup soup_of(const std::vector<Corners>& triangles) {
+  Soup s;
+  for (const Corners& t : triangles) {
+    const Index base = static_cast<Index>(s.points.size());
+    s.points.insert(s.points.end(), t.begin(), t.end());
+    s.add_triangle(base, base + 1, base + 2);
+  }
+  return s;
+}
+
+}  // namespace
+
+struct SurfaceDistance::Impl {
+  Triangles triangles;
+  Tree tree;
+};
+
+SurfaceDistance::SurfaceDistance(const Soup& soup) : impl_(std::make_unique<Impl>()) {
+  for (std::size_t f = 0; f < soup.face_count(); ++f) {
+    const FaceView face = soup.face(f);
+    for (std::size_t k = 1; k + 1 < face.size(); ++k)
+      impl_->triangles.emplace_back(point(soup.points[face[0]]), point(soup.points[face[k]]),
+                                    point(soup.points[face[k + 1]]));
+  }
+  impl_->tree.insert(impl_->triangles.cbegin(), impl_->triangles.cend());
+  impl_->tree.accelerate_distance_queries();
+}
+
+SurfaceDistance::~SurfaceDistance() = default;
+
+bool SurfaceDistance::empty() const { return impl_->triangles.empty(); }
+
+std::size_t SurfaceDistance::nearest_triangle(const Point3d& p) const {
+  const auto hit = impl_->tree.closest_point_and_primitive(point(p));
+  return static_cast<std::size_t>(hit.second - impl_->triangles.cbegin());
+}
+
+double SurfaceDistance::squared_distance_to(const Point3d& p, std::size_t t) const {
+  const K::Triangle_3& tri = impl_->triangles[t];
+  if (tri.is_degenerate()) {
+    return std::min({CGAL::squared_distance(point(p), K::Segment_3(tri[0], tri[1])),
+                     CGAL::squared_distance(point(p), K::Segment_3(tri[1], tri[2])),
+                     CGAL::squared_distance(point(p), K::Segment_3(tri[2], tri[0]))});
+  }
+  return CGAL::squared_distance(point(p), tri);
+}
+
+double SurfaceDistance::squared_distance(const Point3d& p) const {
+  if (impl_->triangles.empty()) return 0.0;
+  return impl_->tree.squared_distance(point(p));
+}
+
+double hausdorff_distance(const Soup& a, const Soup& b, double error_bound) {
+  // A triangle present in both soups is at distance 0 from the other, so
+  // each direction needs only the triangles the other soup lacks: a repair
+  // that changed little is measured in time proportional to what it changed.
+  std::vector<Corners> ta = triangles_of(a), tb = triangles_of(b);
+  std::vector<Corners> sa = ta, sb = tb;
+  std::sort(sa.begin(), sa.end());
+  std::sort(sb.begin(), sb.end());
+  std::vector<Corners> only_a, only_b;
+  std::set_difference(sa.begin(), sa.end(), sb.begin(), sb.end(), std::back_inserter(only_a));
+  std::set_difference(sb.begin(), sb.end(), sa.begin(), sa.end(), std::back_inserter(only_b));
+  if ((ta.empty() && !only_b.empty()) || (tb.empty() && !only_a.empty())) return -1.0;
+  const double ab = only_a.empty() ? 0.0 : one_sided(only_a, SurfaceDistance(soup_of(tb)), error_bound);
+  const double ba = only_b.empty() ? 0.0 : one_sided(only_b, SurfaceDistance(soup_of(ta)), error_bound);
+  return std::max(ab, ba);
+}
+
+}  // namespace polyheal::detail

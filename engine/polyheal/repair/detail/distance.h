@@ -1,0 +1,48 @@
+// polyheal — distances to the input surface: the approximation tolerance of
+// repairs (Botsch & Kobbelt §5: "stays within a prescribed approximation
+// error") and the Hausdorff distance every report states.
+//
+// These are measurements, not certification predicates: they run in doubles
+// on the coordinates as written (an AABB tree of the input triangles).
+#pragma once
+
+#include <memory>
+
+#include "polyheal/mesh/soup.h"
+
+namespace polyheal::detail {
+
+/// Distance queries against a fixed triangle soup (the input surface).
+class SurfaceDistance {
+ public:
+  /// Indexes every triangle of `soup` (polygons as fans). Keeps no reference.
+  explicit SurfaceDistance(const Soup& soup);
+  ~SurfaceDistance();
+  SurfaceDistance(const SurfaceDistance&) = delete;
+  SurfaceDistance& operator=(const SurfaceDistance&) = delete;
+
+  /// Squared distance from p to the nearest point of the surface.
+  double squared_distance(const Point3d& p) const;
+  /// The surface triangle nearest to p (an index for squared_distance_to).
+  std::size_t nearest_triangle(const Point3d& p) const;
+  /// Squared distance from p to surface triangle `t`.
+  double squared_distance_to(const Point3d& p, std::size_t t) const;
+  bool empty() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Symmetric Hausdorff distance between two triangle soups, with bounded
+/// error: the true distance lies in [result, result + error_bound] (up to
+/// double rounding in the distance queries). Each direction bisects
+/// triangles until an upper bound closes the gap: the distance to one fixed
+/// triangle is convex, so its maximum over a piece is at a corner (the bound
+/// of CGAL's bounded_error_Hausdorff_distance); pieces split at their
+/// longest edge, which long thin triangles need. Triangles both soups
+/// contain are skipped, so the cost follows what differs. -1 when one soup is
+/// empty and the other is not (not measured).
+double hausdorff_distance(const Soup& a, const Soup& b, double error_bound);
+
+}  // namespace polyheal::detail

@@ -1,0 +1,403 @@
+#include "polyheal/repair/detail/shape_decimation.h"
+
+#include <CGAL/boost/graph/Euler_operations.h>
+#include <CGAL/boost/graph/helpers.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <queue>
+#include <unordered_map>
+
+#include "polyheal/inspect/exact_predicates.h"
+#include "polyheal/inspect/local_index.h"
+#include "polyheal/repair/detail/distance.h"
+
+namespace polyheal::detail {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+using Triple = std::array<vertex_descriptor, 3>;
+
+
+Point3d operator-(const Point3d& a, const Point3d& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double dot(const Point3d& a, const Point3d& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+/// Shape quality of a triangle for ordering (not a predicate): its smallest
+/// angle or 180° minus its largest, whichever is smaller, in degrees.
+double quality(const Point3d& a, const Point3d& b, const Point3d& c) {
+  const std::array<Point3d, 3> p{a, b, c};
+  double lo = 180.0, hi = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const Point3d u = p[(k + 1) % 3] - p[k], v = p[(k + 2) % 3] - p[k];
+    const double n = std::sqrt(dot(u, u) * dot(v, v));
+    const double angle = n > 0 ? std::acos(std::clamp(dot(u, v) / n, -1.0, 1.0)) * 180.0 / kPi : 0.0;
+    lo = std::min(lo, angle);
+    hi = std::max(hi, angle);
+  }
+  return std::min(lo, 180.0 - hi);
+}
+
+/// Squared distance from p to triangle abc (doubles; a measurement).
+double squared_distance_to_triangle(const Point3d& p, const Point3d& a, const Point3d& b, const Point3d& c) {
+  const InputKernel::Triangle_3 t({a[0], a[1], a[2]}, {b[0], b[1], b[2]}, {c[0], c[1], c[2]});
+  const InputKernel::Point_3 q(p[0], p[1], p[2]);
+  if (t.is_degenerate()) {
+    return std::min({CGAL::squared_distance(q, InputKernel::Segment_3(t[0], t[1])),
+                     CGAL::squared_distance(q, InputKernel::Segment_3(t[1], t[2])),
+                     CGAL::squared_distance(q, InputKernel::Segment_3(t[0], t[2]))});
+  }
+  return CGAL::squared_distance(q, t);
+}
+
+}  // namespace
+
+struct ShapeDecimator::Impl {
+  Mesh& mesh;
+  LocalIndex& index;
+  const SurfaceDistance& input;
+  DecimationOptions o;
+  double cos_cap, cos_needle, tol2;
+  DecimationStats stats;
+  std::unordered_map<std::uint32_t, std::vector<Point3d>> attached;  // removed vertices, by nearest face
+
+  /// A candidate operation, fully evaluated.
+  struct Plan {
+    bool flip = false;
+    halfedge_descriptor h;          // collapse: source removed, target kept; flip: the edge
+    std::vector<Triple> proposed;   // the new triangles
+    std::vector<face_descriptor> replaced;  // faces removed or reshaped
+    double worst = -1.0;            // the worst quality among `proposed`
+    bool simplify = false;          // removing a vertex only where every new face is fine
+  };
+
+  FaceFlagMap on_input;
+  std::vector<char> sticky;  // by vertex index: split points of the slice being tidied
+  bool is_sticky(vertex_descriptor v) const {
+    return static_cast<std::size_t>(v) < sticky.size() && sticky[static_cast<std::size_t>(v)];
+  }
+  /// Double approximations of the vertices, computed once (NaN: not yet).
+  Mesh::Property_map<vertex_descriptor, Point3d> approx_point;
+
+  Impl(Mesh& m, LocalIndex& i, const SurfaceDistance& d, const DecimationOptions& opt)
+      : mesh(m), index(i), input(d), o(opt), on_input(face_on_input_map(m)),
+        approx_point(m.add_property_map<vertex_descriptor, Point3d>(
+                          "v:polyheal_approx", Point3d{std::nan(""), 0.0, 0.0}).first) {
+    cos_cap = std::cos(o.cap_angle * kPi / 180.0);
+    cos_needle = std::cos(o.needle_angle * kPi / 180.0);
+    // Sampling can miss the farthest point by a little: decide at 60% of the
+    // tolerance; the report states the Hausdorff distance actually measured.
+    tol2 = 0.36 * o.tolerance * o.tolerance;
+  }
+
+  ~Impl() { mesh.remove_property_map(approx_point); }
+
+  const Point3d& approx(vertex_descriptor v) const {
+    Point3d& a = const_cast<Mesh::Property_map<vertex_descriptor, Point3d>&>(approx_point)[v];
+    if (std::isnan(a[0])) {
+      const Point& p = mesh.point(v);
+      a = {CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())};
+    }
+    return a;
+  }
+
+  Triple corners(face_descriptor f) const {
+    const halfedge_descriptor h = mesh.halfedge(f);
+    return {mesh.source(h), mesh.target(h), mesh.target(mesh.next(h))};
+  }
+  double quality_of(const Triple& t) const {
+    return quality(approx(t[0]), approx(t[1]), approx(t[2]));
+  }
+  bool is_bad(face_descriptor f) const { return classify_face(mesh, f, cos_cap, cos_needle) != Shape::fine; }
+
+  Kernel::Vector_3 normal(const Triple& t) const {
+    return CGAL::cross_product(mesh.point(t[1]) - mesh.point(t[0]), mesh.point(t[2]) - mesh.point(t[0]));
+  }
+  bool same_side(const Triple& a, const Triple& b) const {
+    return CGAL::is_positive(normal(a) * normal(b));
+  }
+
+  // ---- planning (the mesh is not touched) ----
+
+  /// Exact shape checks and the measured tolerance; fills plan.worst. The
+  /// exact self-intersection query is left to choose().
+  bool acceptable(Plan& plan) const {
+    double worst = 180.0;
+    std::size_t bad_after = 0, bad_before = 0;
+    for (const Triple& t : plan.proposed) {
+      const Shape s = classify_triangle(mesh.point(t[0]), mesh.point(t[1]), mesh.point(t[2]), cos_cap, cos_needle);
+      if (s == Shape::degenerate || s == Shape::cap) return false;
+      bad_after += s != Shape::fine;
+      worst = std::min(worst, quality_of(t));
+    }
+    double before = 180.0;
+    for (face_descriptor f : plan.replaced) {
+      before = std::min(before, quality_of(corners(f)));
+      bad_before += is_bad(f);
+    }
+    // A flip must raise the worst quality it replaces (so flips cannot
+    // cycle); a collapse removes a vertex, so fewer bad faces also count.
+    const bool better = plan.simplify ? bad_after == 0 && bad_before == 0
+                                      : worst > before || (!plan.flip && bad_after < bad_before);
+    if (!better) return false;
+    plan.worst = worst;
+    return within_tolerance(plan);  // the costlier exact intersection test comes last (choose())
+  }
+
+  /// Output -> input: samples of each new triangle near the input surface.
+  /// Input -> output: vertices removed so far, attached to replaced faces,
+  /// (and a collapse's own removed vertex) near the new triangles.
+  bool within_tolerance(const Plan& plan) const {
+    bool ok = true;
+    for (const Triple& t : plan.proposed) {
+      // Every vertex lies on the input surface, so a triangle no longer than
+      // the tolerance is within it everywhere; longer ones are sampled.
+      double longest2 = 0;
+      for (int k = 0; k < 3; ++k) {
+        const Point3d d = approx(t[k]) - approx(t[(k + 1) % 3]);
+        longest2 = std::max(longest2, dot(d, d));
+      }
+      if (longest2 <= tol2) continue;
+      const int steps = std::min(6, 1 + static_cast<int>(std::sqrt(longest2 / tol2)));
+      for_each_sample(t, steps, [&](const Point3d& p) {
+        if (ok && input.squared_distance(p) > tol2) ok = false;
+      });
+      if (!ok) return false;
+    }
+    for_each_displaced(plan, [&](const Point3d& p) {
+      if (ok && nearest(plan.proposed, p).second > tol2) ok = false;
+    });
+    return ok;
+  }
+
+  /// Points of triangle t on a barycentric grid of `steps` (corners included).
+  template <class F>
+  void for_each_sample(const Triple& t, int steps, F f) const {
+    const Point3d a = approx(t[0]), b = approx(t[1]), c = approx(t[2]);
+    for (int i = 0; i <= steps; ++i)
+      for (int j = 0; i + j <= steps; ++j) {
+        const int k = steps - i - j;
+        Point3d p;
+        for (int d = 0; d < 3; ++d) p[d] = (i * a[d] + j * b[d] + k * c[d]) / steps;
+        f(p);
+      }
+  }
+
+  /// Points of the input surface the operation takes away from the mesh:
+  /// samples of replaced faces that still lay in the input surface, the
+  /// points earlier operations attached to replaced faces, and a collapse's
+  /// removed vertex.
+  template <class F>
+  void for_each_displaced(const Plan& plan, F f) const {
+    for (face_descriptor r : plan.replaced) {
+      if (on_input[r]) for_each_sample(corners(r), 4, f);
+      auto it = attached.find(static_cast<std::uint32_t>(r));
+      if (it != attached.end())
+        for (const Point3d& p : it->second) f(p);
+    }
+    if (!plan.flip) f(approx(mesh.source(plan.h)));
+  }
+
+  std::pair<std::size_t, double> nearest(const std::vector<Triple>& tris, const Point3d& p) const {
+    std::pair<std::size_t, double> best{0, std::numeric_limits<double>::infinity()};
+    for (std::size_t i = 0; i < tris.size(); ++i) {
+      const double d = squared_distance_to_triangle(p, approx(tris[i][0]), approx(tris[i][1]),
+                                                    approx(tris[i][2]));
+      if (d < best.second) best = {i, d};
+    }
+    return best;
+  }
+
+  /// Collapse of h: source u goes, target v stays.
+  bool plan_collapse(halfedge_descriptor h, Plan& plan, bool simplify = false) const {
+    const vertex_descriptor u = mesh.source(h), v = mesh.target(h);
+    const auto e = mesh.edge(h);
+    if (!CGAL::Euler::does_satisfy_link_condition(e, mesh)) return false;
+    const bool border_edge = mesh.is_border(e);
+    if (CGAL::is_border(u, mesh) && !border_edge) return false;  // u would leave the boundary
+    if (border_edge) {  // a boundary loop of three edges would close
+      const halfedge_descriptor b = mesh.is_border(h) ? h : mesh.opposite(h);
+      if (mesh.next(mesh.next(mesh.next(b))) == b) return false;
+    }
+    plan = Plan{};
+    plan.h = h;
+    // A fresh split point may merge with another one, but collapsing it back
+    // into an old vertex must leave only fine faces (or it undoes the slice).
+    plan.simplify = simplify || (is_sticky(u) && !is_sticky(v));
+    for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh.halfedge(u), mesh)) {
+      const face_descriptor f = mesh.face(g);
+      if (f == Mesh::null_face()) continue;
+      plan.replaced.push_back(f);
+      Triple t = corners(f);
+      if (std::find(t.begin(), t.end(), v) != t.end()) continue;  // one of the two faces that vanish
+      const Triple old = t;
+      std::replace(t.begin(), t.end(), u, v);
+      if (!same_side(old, t)) return false;
+      plan.proposed.push_back(t);
+    }
+    if (plan.proposed.empty()) return false;
+    return acceptable(plan);
+  }
+
+  bool plan_flip(halfedge_descriptor h, Plan& plan) const {
+    const auto e = mesh.edge(h);
+    if (mesh.is_border(e)) return false;
+    const halfedge_descriptor o = mesh.opposite(h);
+    const vertex_descriptor s = mesh.source(h), t = mesh.target(h), x = mesh.target(mesh.next(h)),
+                            y = mesh.target(mesh.next(o));
+    if (x == y || CGAL::halfedge(x, y, mesh).second) return false;  // the new edge exists already
+    plan = Plan{};
+    plan.flip = true;
+    plan.h = h;
+    plan.replaced = {mesh.face(h), mesh.face(o)};
+    plan.proposed = {Triple{t, x, y}, Triple{x, s, y}};
+    const Triple a = corners(mesh.face(h)), b = corners(mesh.face(o));
+    for (const Triple& n : plan.proposed)
+      if (!same_side(a, n) || !same_side(b, n)) return false;
+    return acceptable(plan);
+  }
+
+  /// The best valid operation removing bad face f, if any.
+  bool best_plan(face_descriptor f, Plan& best) const {
+    std::array<halfedge_descriptor, 3> hs;
+    std::array<Point3d, 3> p;
+    {
+      halfedge_descriptor h = mesh.halfedge(f);
+      for (int k = 0; k < 3; ++k, h = mesh.next(h)) {
+        hs[k] = h;
+        p[k] = approx(mesh.target(h));
+      }
+    }
+    // edges by length: hs[k] runs from corner k-1 to corner k
+    std::array<int, 3> order{0, 1, 2};
+    auto len = [&](int k) { const Point3d d = p[k] - p[(k + 2) % 3]; return dot(d, d); };
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return len(a) < len(b); });
+    std::vector<Plan> candidates;
+    Plan plan;
+    for (int k : {order[0], order[1]}) {  // collapse the short edges, either way
+      if (plan_collapse(hs[k], plan)) candidates.push_back(plan);
+      if (plan_collapse(mesh.opposite(hs[k]), plan)) candidates.push_back(plan);
+    }
+    if (plan_flip(hs[order[2]], plan)) candidates.push_back(plan);  // flip the longest (caps, collinear faces)
+    return choose(candidates, best);
+  }
+
+  /// The best-shaped candidate that creates no self-intersection.
+  bool choose(std::vector<Plan>& candidates, Plan& best) const {
+    std::sort(candidates.begin(), candidates.end(), [](const Plan& a, const Plan& b) { return a.worst > b.worst; });
+    for (Plan& c : candidates)
+      if (!index.would_intersect(c.proposed, c.replaced)) {
+        best = std::move(c);
+        return true;
+      }
+    return false;
+  }
+
+  // ---- applying ----
+
+  std::vector<face_descriptor> apply(const Plan& plan) {
+    std::vector<Point3d> displaced;
+    for_each_displaced(plan, [&](const Point3d& p) { displaced.push_back(p); });
+    for (face_descriptor f : plan.replaced) {
+      attached.erase(static_cast<std::uint32_t>(f));
+      index.remove(f);
+    }
+    std::vector<face_descriptor> changed;
+    if (plan.flip) {
+      CGAL::Euler::flip_edge(plan.h, mesh);
+      changed = plan.replaced;
+      for (face_descriptor f : changed) on_input[f] = 0;
+      ++stats.flips;
+    } else {
+      for (face_descriptor f : plan.replaced) on_input[f] = 0;  // the two that vanish do not matter
+      const Point keep = mesh.point(mesh.target(plan.h));
+      const vertex_descriptor v = CGAL::Euler::collapse_edge(mesh.edge(plan.h), mesh);
+      mesh.point(v) = keep;
+      for (face_descriptor f : CGAL::faces_around_target(mesh.halfedge(v), mesh))
+        if (f != Mesh::null_face()) changed.push_back(f);
+      ++stats.collapses;
+    }
+    index.update(changed);
+    attach(displaced, changed);
+    return changed;
+  }
+
+  void attach(const std::vector<Point3d>& points, const std::vector<face_descriptor>& faces) {
+    if (faces.empty()) return;
+    std::vector<Triple> tris;
+    for (face_descriptor f : faces) tris.push_back(corners(f));
+    for (const Point3d& p : points)
+      attached[static_cast<std::uint32_t>(faces[nearest(tris, p).first])].push_back(p);
+  }
+
+  void run(const std::vector<face_descriptor>& seeds) {
+    using Entry = std::pair<double, std::uint32_t>;  // (quality, face): worst first
+    std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+    auto push = [&](face_descriptor f) {
+      if (!mesh.is_removed(f) && is_bad(f)) queue.emplace(quality_of(corners(f)), static_cast<std::uint32_t>(f));
+    };
+    for (face_descriptor f : seeds) push(f);
+    while (!queue.empty()) {
+      const auto [q, i] = queue.top();
+      queue.pop();
+      const face_descriptor f(i);
+      if (mesh.is_removed(f) || quality_of(corners(f)) != q || !is_bad(f)) continue;  // stale entry
+      Plan plan;
+      if (!best_plan(f, plan)) continue;  // stuck for now; a neighbour's operation re-queues it
+      const std::vector<face_descriptor> changed = apply(plan);
+      // the changed faces and their neighbours may be bad, or freed to improve
+      std::vector<face_descriptor> around;
+      for (face_descriptor g : changed)
+        for (vertex_descriptor w : CGAL::vertices_around_face(mesh.halfedge(g), mesh))
+          for (face_descriptor n : CGAL::faces_around_target(mesh.halfedge(w), mesh))
+            if (n != Mesh::null_face()) around.push_back(n);
+      std::sort(around.begin(), around.end());
+      around.erase(std::unique(around.begin(), around.end()), around.end());
+      for (face_descriptor g : around) push(g);
+    }
+  }
+
+  /// Removes vertices (a slice's split points) wherever a collapse leaves
+  /// only fine faces, within the tolerance — the paper's §7 "decimating along
+  /// the intersection curve after each slicing".
+  void simplify(const std::vector<vertex_descriptor>& vertices) {
+    for (vertex_descriptor x : vertices) {
+      if (mesh.is_removed(x) || mesh.is_isolated(x)) continue;
+      std::vector<Plan> candidates;
+      Plan plan, best;
+      for (halfedge_descriptor h : CGAL::halfedges_around_source(x, mesh))
+        if (plan_collapse(h, plan, true)) candidates.push_back(plan);
+      if (choose(candidates, best)) apply(best);
+    }
+  }
+
+  void reattach(const std::vector<face_descriptor>& faces) {
+    std::vector<Point3d> points;
+    for (face_descriptor f : faces) {
+      auto it = attached.find(static_cast<std::uint32_t>(f));
+      if (it == attached.end()) continue;
+      points.insert(points.end(), it->second.begin(), it->second.end());
+      attached.erase(it);
+    }
+    attach(points, faces);
+  }
+};
+
+ShapeDecimator::ShapeDecimator(Mesh& mesh, LocalIndex& index, const SurfaceDistance& input,
+                               const DecimationOptions& options)
+    : impl_(std::make_unique<Impl>(mesh, index, input, options)) {}
+ShapeDecimator::~ShapeDecimator() = default;
+void ShapeDecimator::run(const std::vector<face_descriptor>& faces, const std::vector<vertex_descriptor>& fresh) {
+  for (vertex_descriptor v : fresh) {
+    if (static_cast<std::size_t>(v) >= impl_->sticky.size()) impl_->sticky.resize(static_cast<std::size_t>(v) + 1, 0);
+    impl_->sticky[static_cast<std::size_t>(v)] = 1;
+  }
+  impl_->run(faces);
+  impl_->sticky.clear();
+}
+void ShapeDecimator::simplify(const std::vector<vertex_descriptor>& vertices) { impl_->simplify(vertices); }
+void ShapeDecimator::reattach(const std::vector<face_descriptor>& faces) { impl_->reattach(faces); }
+bool ShapeDecimator::is_bad(face_descriptor f) const { return impl_->is_bad(f); }
+const DecimationStats& ShapeDecimator::stats() const { return impl_->stats; }
+
+}  // namespace polyheal::detail

@@ -1,0 +1,87 @@
+// polyheal — removing needles (and what slicing left) by local operations
+// (Botsch & Kobbelt §5: "a suitable mesh decimation algorithm ... that stays
+// within a prescribed approximation error and controls the decimation process
+// to optimize for well shaped triangles").
+//
+// Operations, each decided before it is made:
+//   halfedge collapse u -> v   u's faces are re-attached to v, which keeps its
+//                              exact position (no new coordinates: input
+//                              vertices stay as read)
+//   edge flip                  the diagonal of two faces' quad is swapped
+//                              (the fix for exactly collinear faces)
+// An operation is made only if, exactly on the Epeck points,
+//   - the link condition holds and no boundary vertex leaves the boundary
+//     (manifoldness, genus and boundary count unchanged);
+//   - no new triangle is degenerate or a cap, and none turns against the
+//     face it replaces (normals keep a positive dot product);
+//   - no new triangle intersects another face (LocalIndex::would_intersect);
+// and, measured in doubles against the input surface (distance.h):
+//   - samples of every new triangle lie within `tolerance` of the input;
+//   - the input surface it takes away stays within `tolerance` of the new
+//     faces: samples of replaced faces that still lay in the input surface
+//     (kFaceOnInput), and the removed vertex, are attached to the nearest new
+//     face and re-checked whenever that face is replaced in turn (as in
+//     Kobbelt, Campagna & Seidel's decimation framework, the paper's [11]);
+//     sampling decides at 60% of the tolerance, and the pipeline reports the
+//     Hausdorff distance measured on the result;
+// and it strictly raises the worst angle quality of the faces it replaces.
+// Among the valid operations for a bad face the one leaving the best worst
+// triangle wins; bad faces are treated worst first.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+#include "polyheal/mesh/mesh.h"
+
+namespace polyheal {
+class LocalIndex;
+}
+
+namespace polyheal::detail {
+
+class SurfaceDistance;
+
+struct DecimationOptions {
+  double cap_angle = 175.0;    // degrees
+  double needle_angle = 5.0;   // degrees
+  double tolerance = 0.0;      // model units: distance to the input surface
+};
+
+struct DecimationStats {
+  std::size_t collapses = 0;
+  std::size_t flips = 0;
+};
+
+class ShapeDecimator {
+ public:
+  /// `index` must index every face of `mesh` and is kept up to date.
+  ShapeDecimator(Mesh& mesh, LocalIndex& index, const SurfaceDistance& input, const DecimationOptions& options);
+  ~ShapeDecimator();
+
+  /// Removes the needles, caps and zero-area faces among `faces`, and those
+  /// its own operations create. Faces it cannot fix stay (is_bad()).
+  /// `fresh` (a slice's split points) may merge with each other, but are
+  /// collapsed into older vertices only where that leaves only fine faces —
+  /// otherwise decimation would undo the slice that was made for it.
+  void run(const std::vector<face_descriptor>& faces, const std::vector<vertex_descriptor>& fresh = {});
+
+  /// Collapses away each of `vertices` (a slice's split points) where that
+  /// leaves only fine faces within the tolerance (paper §7: "decimating along
+  /// the intersection curve after each slicing").
+  void simplify(const std::vector<vertex_descriptor>& vertices);
+
+  /// After another operation (a slice) reshaped `faces`: the vertices
+  /// attached to them are re-attached to the nearest of them.
+  void reattach(const std::vector<face_descriptor>& faces);
+
+  bool is_bad(face_descriptor f) const;
+  const DecimationStats& stats() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace polyheal::detail
