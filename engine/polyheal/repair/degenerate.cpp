@@ -308,13 +308,15 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   // What decimation could not remove: caps whose slice was refused may be
   // sliceable now that their neighbourhood changed; stuck needles get local
   // supersampling. Bounded: slices per round at most twice the bad faces
-  // left (plus a constant), and a few rounds.
-  for (int round = 0; round < 6; ++round) {
-    const std::size_t bad = pipeline.bad_faces().size();
-    if (bad == 0) break;
+  // left (plus a constant), at most 24 rounds, and three without progress.
+  std::size_t bad = pipeline.bad_faces().size(), stalled = 0;
+  for (int round = 0; round < 24 && bad > 0 && stalled < 3; ++round) {
     const std::size_t made = pipeline.slice_caps() + pipeline.slice_needles(2 * bad + 16);
     pipeline.decimate(pipeline.bad_faces());
     if (made == 0) break;
+    const std::size_t now = pipeline.bad_faces().size();
+    stalled = now < bad ? 0 : stalled + 1;  // three rounds without progress end it
+    bad = now;
   }
   pipeline.finish_stats();
   r.seconds_decimation = seconds_since(t0);
@@ -356,10 +358,17 @@ void certify(const Soup& input, const Soup& written, DegenerateReport& r) {
     r.leftovers.push_back({f, "needle", why(f, "no collapse or flip within the tolerance keeps the surface "
                                                "manifold, cap-free and intersection-free")});
   std::sort(r.leftovers.begin(), r.leftovers.end(), [](const Leftover& a, const Leftover& b) { return a.face < b.face; });
-  // CGAL's bounded-error Hausdorff: the true distance is within the error
-  // bound of the estimate, so the certificate requires estimate + bound.
-  const double error_bound = 0.3 * r.tolerance;
+  // Bounded-error Hausdorff distance: the true value lies in [h, h + bound].
+  // A coarse bound first; where h + bound straddles the tolerance, tighten
+  // the bound just enough to decide (the cost grows as the bound shrinks).
+  double error_bound = 0.25 * r.tolerance;
   r.hausdorff = detail::hausdorff_distance(clean, written, error_bound);
+  for (int k = 0; k < 2 && r.hausdorff >= 0 && r.hausdorff < r.tolerance &&
+                  r.hausdorff + error_bound > r.tolerance;
+       ++k) {
+    error_bound = 0.9 * (r.tolerance - r.hausdorff);
+    r.hausdorff = detail::hausdorff_distance(clean, written, error_bound);
+  }
   r.hausdorff_error_bound = error_bound;
   r.certified = r.after.total() == 0 && r.topology_out == r.topology_in &&
                 r.self_intersections_out <= r.self_intersections_in && r.hausdorff >= 0 &&

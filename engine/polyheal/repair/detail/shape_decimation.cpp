@@ -85,9 +85,9 @@ struct ShapeDecimator::Impl {
                           "v:polyheal_approx", Point3d{std::nan(""), 0.0, 0.0}).first) {
     cos_cap = std::cos(o.cap_angle * kPi / 180.0);
     cos_needle = std::cos(o.needle_angle * kPi / 180.0);
-    // Sampling can miss the farthest point by a little: decide at 60% of the
+    // Sampling can miss the farthest point by a little: decide at 70% of the
     // tolerance; the report states the Hausdorff distance actually measured.
-    tol2 = 0.36 * o.tolerance * o.tolerance;
+    tol2 = 0.49 * o.tolerance * o.tolerance;
   }
 
   ~Impl() { mesh.remove_property_map(approx_point); }

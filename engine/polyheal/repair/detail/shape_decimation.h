@@ -22,7 +22,7 @@
 //     (kFaceOnInput), and the removed vertex, are attached to the nearest new
 //     face and re-checked whenever that face is replaced in turn (as in
 //     Kobbelt, Campagna & Seidel's decimation framework, the paper's [11]);
-//     sampling decides at 60% of the tolerance, and the pipeline reports the
+//     sampling decides at 70% of the tolerance, and the pipeline reports the
 //     Hausdorff distance measured on the result;
 // and it strictly raises the worst angle quality of the faces it replaces.
 // Among the valid operations for a bad face the one leaving the best worst
