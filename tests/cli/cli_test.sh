@@ -33,5 +33,23 @@ grep_out "is a directory" "$tmp/err" "directory named in the error"
 expect 2 "bad option" -- "$bin" check --cap-angle 500 "$src/fixtures/torus.off"
 expect 0 "help" -- "$bin" check --help
 grep_out "Exit 0 when the mesh is a certified clean" "$tmp/out" "help explains exit codes"
+# polyheal degenerate
+printf 'OFF\n5 6 0\n0 0 0\n2 0 0\n0 2 0\n0 0 2\n1 0 0\n3 2 1 4\n3 2 4 0\n3 0 1 3\n3 0 3 2\n3 1 2 3\n3 1 0 4\n' > "$tmp/tjunction.off"
+expect 0 "degenerate removes a zero-area face" -- "$bin" degenerate "$tmp/tjunction.off" -o "$tmp/tj_out.off"
+grep_out "CERTIFIED" "$tmp/out" "degenerate verdict printed"
+expect 0 "degenerate output checks clean" -- "$bin" check "$tmp/tj_out.off"
+expect 2 "degenerate refuses to overwrite an existing output" -- "$bin" degenerate "$tmp/tjunction.off" -o "$tmp/tj_out.off"
+expect 2 "degenerate never writes over its input" -- "$bin" degenerate "$tmp/tjunction.off" -o "$tmp/tjunction.off" --overwrite
+cmp -s "$tmp/tjunction.off" <(printf 'OFF\n5 6 0\n0 0 0\n2 0 0\n0 2 0\n0 0 2\n1 0 0\n3 2 1 4\n3 2 4 0\n3 0 1 3\n3 0 3 2\n3 1 2 3\n3 1 0 4\n') \
+  && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: input was modified"; }
+expect 0 "degenerate --json" -- "$bin" degenerate --json "$tmp/tjunction.off" -o "$tmp/tj_out2.stl" --tolerance 0.5%
+grep_out '"schema": "polyheal.degenerate/1"' "$tmp/out" "degenerate json schema tag"
+grep_out '"zero_area": 1' "$tmp/out" "degenerate json counts the zero-area face"
+printf 'OFF\n5 5 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 1 1\n3 0 1 2\n3 0 1 3\n3 0 1 4\n3 1 2 3\n3 0 2 3\n' > "$tmp/nonmanifold.off"
+expect 2 "degenerate refuses a non-manifold soup" -- "$bin" degenerate "$tmp/nonmanifold.off" -o "$tmp/nm_out.off"
+grep_out "nonmanifold.off: not an oriented 2-manifold mesh" "$tmp/err" "non-manifold refusal names the file"
+expect 2 "degenerate bad tolerance" -- "$bin" degenerate "$tmp/tjunction.off" -o "$tmp/x.off" --tolerance abc
+expect 2 "degenerate malformed input" -- "$bin" degenerate "$tmp/bad.off" -o "$tmp/x.off"
+[ ! -e "$tmp/x.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: output written on error"; }
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]
