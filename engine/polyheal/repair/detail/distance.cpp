@@ -59,51 +59,63 @@ double norm(const Point3d& a, const Point3d& b) {
 double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, double error_bound) {
   struct Piece {
     Corners p;
-    std::array<double, 3> d;
+    std::array<double, 3> d;          // distance of each corner to `to`
+    std::array<std::size_t, 3> near;  // the triangle of `to` nearest each corner
+    std::size_t best;                 // the triangle that gave the parent its bound
   };
-  auto dist = [&](const Point3d& p) { return std::sqrt(to.squared_distance(p)); };
-  // Upper bound on a piece: for each candidate triangle of `to` (the ones
-  // nearest its corners and centroid), the largest corner distance to it.
-  auto upper_bound = [&](const Piece& piece) {
-    Point3d c;
-    for (int k = 0; k < 3; ++k) c[k] = (piece.p[0][k] + piece.p[1][k] + piece.p[2][k]) / 3.0;
-    double best = std::numeric_limits<double>::infinity();
-    for (const Point3d& q : {c, piece.p[0], piece.p[1], piece.p[2]}) {
-      const std::size_t t = to.nearest_triangle(q);
+  // Upper bound on a piece: the distance to one triangle is convex, so its
+  // maximum over the piece is at a corner; try the triangles nearest the
+  // corners and the parent's, no new query needed.
+  auto upper_bound = [&](Piece& piece) {
+    double bound = std::numeric_limits<double>::infinity();
+    for (std::size_t t : {piece.best, piece.near[0], piece.near[1], piece.near[2]}) {
       double m = 0;
       for (const Point3d& v : piece.p) m = std::max(m, to.squared_distance_to(v, t));
-      best = std::min(best, m);
-      if (best == 0) break;
+      if (m < bound) {
+        bound = m;
+        piece.best = t;
+      }
+      if (bound == 0) break;
     }
-    return std::sqrt(best);
+    return std::sqrt(bound);
   };
   double lower = 0.0;
   std::vector<Piece> stack;
   for (const Corners& t : from) {
-    Piece piece{t, {dist(t[0]), dist(t[1]), dist(t[2])}};
+    Piece piece;
+    piece.p = t;
+    for (int k = 0; k < 3; ++k) {
+      const auto [d2, near] = to.nearest(t[k]);
+      piece.d[k] = std::sqrt(d2);
+      piece.near[k] = near;
+    }
+    piece.best = piece.near[0];
     lower = std::max({lower, piece.d[0], piece.d[1], piece.d[2]});
     stack.push_back(piece);
   }
   while (!stack.empty()) {
-    const Piece piece = stack.back();
+    Piece piece = stack.back();
     stack.pop_back();
     const std::array<double, 3> edge{norm(piece.p[1], piece.p[2]), norm(piece.p[2], piece.p[0]),
                                      norm(piece.p[0], piece.p[1])};  // edge k is opposite corner k
     const int k = static_cast<int>(std::max_element(edge.begin(), edge.end()) - edge.begin());
-    // 1-Lipschitz bound first (cheap), then the convexity bound
+    // 1-Lipschitz bound first (free), then the convexity bound
     if (*std::min_element(piece.d.begin(), piece.d.end()) + edge[k] <= lower + error_bound) continue;
     if (upper_bound(piece) <= lower + error_bound) continue;
     const int i = (k + 1) % 3, j = (k + 2) % 3;  // the longest edge runs from corner i to corner j
     Point3d m;
     for (int c = 0; c < 3; ++c) m[c] = 0.5 * (piece.p[i][c] + piece.p[j][c]);
     if (m == piece.p[i] || m == piece.p[j]) continue;  // no double left between them
-    const double dm = dist(m);
+    const auto [dm2, near] = to.nearest(m);
+    const double dm = std::sqrt(dm2);
     lower = std::max(lower, dm);
     Piece a = piece, b = piece;
     a.p[j] = m;
     a.d[j] = dm;
+    a.near[j] = near;
     b.p[i] = m;
     b.d[i] = dm;
+    b.near[i] = near;
     stack.push_back(a);
     stack.push_back(b);
   }
@@ -142,9 +154,10 @@ SurfaceDistance::~SurfaceDistance() = default;
 
 bool SurfaceDistance::empty() const { return impl_->triangles.empty(); }
 
-std::size_t SurfaceDistance::nearest_triangle(const Point3d& p) const {
-  const auto hit = impl_->tree.closest_point_and_primitive(point(p));
-  return static_cast<std::size_t>(hit.second - impl_->triangles.cbegin());
+std::pair<double, std::size_t> SurfaceDistance::nearest(const Point3d& p) const {
+  const K::Point_3 q = point(p);
+  const auto hit = impl_->tree.closest_point_and_primitive(q);
+  return {CGAL::squared_distance(q, hit.first), static_cast<std::size_t>(hit.second - impl_->triangles.cbegin())};
 }
 
 double SurfaceDistance::squared_distance_to(const Point3d& p, std::size_t t) const {

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <memory>
+#include <utility>
 
 #include "polyheal/mesh/soup.h"
 
@@ -23,8 +24,9 @@ class SurfaceDistance {
 
   /// Squared distance from p to the nearest point of the surface.
   double squared_distance(const Point3d& p) const;
-  /// The surface triangle nearest to p (an index for squared_distance_to).
-  std::size_t nearest_triangle(const Point3d& p) const;
+  /// Squared distance from p to the surface, and the surface triangle that
+  /// realises it (an index for squared_distance_to).
+  std::pair<double, std::size_t> nearest(const Point3d& p) const;
   /// Squared distance from p to surface triangle `t`.
   double squared_distance_to(const Point3d& p, std::size_t t) const;
   bool empty() const;
