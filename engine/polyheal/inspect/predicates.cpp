@@ -147,7 +147,21 @@ Shape classify_triangle(const Point& a, const Point& b, const Point& c, double c
   }
   using FT = Kernel::FT;
   auto sub = [](const Point& x, const Point& y) { return Vec<FT>{x.x() - y.x(), x.y() - y.y(), x.z() - y.z()}; };
+  // Intervals from the points' own approximations first (no lazy DAG built),
+  // exact lazy arithmetic only when a sign is uncertain.
+  auto isub = [](const Point& x, const Point& y) {
+    const auto &ax = x.approx(), &ay = y.approx();
+    return Vec<Interval>{ax.x() - ay.x(), ax.y() - ay.y(), ax.z() - ay.z()};
+  };
   auto decide = [&](const Point& apex, const Point& y, const Point& z, double c, auto from_signs) {
+    {
+      CGAL::Protect_FPU_rounding<true> protect;
+      try {
+        const auto [dot_sign, test_sign] = angle_signs(isub(y, apex), isub(z, apex), c);
+        return from_signs(dot_sign, test_sign, c);
+      } catch (CGAL::Uncertain_conversion_exception&) {
+      }
+    }
     const auto [dot_sign, test_sign] = angle_signs(sub(y, apex), sub(z, apex), c);
     return from_signs(dot_sign, test_sign, c);
   };

@@ -152,6 +152,12 @@ SurfaceDistance::SurfaceDistance(const Soup& soup) : impl_(std::make_unique<Impl
 
 SurfaceDistance::~SurfaceDistance() = default;
 
+double SurfaceDistance::squared_distance(const Point3d& p, const Point3d& hint) const {
+  if (impl_->triangles.empty()) return 0.0;
+  const K::Point_3 q = point(p);
+  return CGAL::squared_distance(q, impl_->tree.closest_point(q, point(hint)));
+}
+
 bool SurfaceDistance::empty() const { return impl_->triangles.empty(); }
 
 std::pair<double, std::size_t> SurfaceDistance::nearest(const Point3d& p) const {

@@ -24,6 +24,8 @@ class SurfaceDistance {
 
   /// Squared distance from p to the nearest point of the surface.
   double squared_distance(const Point3d& p) const;
+  /// The same, given a point of the surface near p (prunes the search).
+  double squared_distance(const Point3d& p, const Point3d& hint) const;
   /// Squared distance from p to the surface, and the surface triangle that
   /// realises it (an index for squared_distance_to).
   std::pair<double, std::size_t> nearest(const Point3d& p) const;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <queue>
 #include <unordered_map>
 
@@ -119,8 +120,8 @@ struct ShapeDecimator::Impl {
 
   // ---- planning (the mesh is not touched) ----
 
-  /// Exact shape checks and the measured tolerance; fills plan.worst. The
-  /// exact self-intersection query is left to choose().
+  /// Exact shape checks and the improvement rule; fills plan.worst. The
+  /// costlier tolerance and self-intersection tests are left to choose().
   bool acceptable(Plan& plan) const {
     double worst = 180.0;
     std::size_t bad_after = 0, bad_before = 0;
@@ -141,7 +142,7 @@ struct ShapeDecimator::Impl {
                                       : worst > before || (!plan.flip && bad_after < bad_before);
     if (!better) return false;
     plan.worst = worst;
-    return within_tolerance(plan);  // the costlier exact intersection test comes last (choose())
+    return true;  // the costlier tolerance and intersection tests: choose(), best first
   }
 
   /// Output -> input: samples of each new triangle near the input surface.
@@ -159,8 +160,21 @@ struct ShapeDecimator::Impl {
       }
       if (longest2 <= tol2) continue;
       const int steps = std::min(6, 1 + static_cast<int>(std::sqrt(longest2 / tol2)));
+      const std::array<Point3d, 3> corner{approx(t[0]), approx(t[1]), approx(t[2])};
       for_each_sample(t, steps, [&](const Point3d& p) {
-        if (ok && input.squared_distance(p) > tol2) ok = false;
+        if (!ok) return;
+        // The corners lie on the input: a sample within the tolerance of
+        // one needs no query, and the nearest corner is the query's hint.
+        double near2 = std::numeric_limits<double>::infinity();
+        const Point3d* hint = &corner[0];
+        for (const Point3d& c : corner) {
+          const Point3d d = p - c;
+          if (dot(d, d) < near2) {
+            near2 = dot(d, d);
+            hint = &c;
+          }
+        }
+        if (near2 > tol2 && input.squared_distance(p, *hint) > tol2) ok = false;
       });
       if (!ok) return false;
     }
@@ -282,11 +296,12 @@ struct ShapeDecimator::Impl {
     return choose(candidates, best);
   }
 
-  /// The best-shaped candidate that creates no self-intersection.
+  /// The best-shaped candidate within the tolerance that creates no
+  /// self-intersection.
   bool choose(std::vector<Plan>& candidates, Plan& best) const {
     std::sort(candidates.begin(), candidates.end(), [](const Plan& a, const Plan& b) { return a.worst > b.worst; });
     for (Plan& c : candidates)
-      if (!index.would_intersect(c.proposed, c.replaced)) {
+      if (within_tolerance(c) && !index.would_intersect(c.proposed, c.replaced)) {
         best = std::move(c);
         return true;
       }
