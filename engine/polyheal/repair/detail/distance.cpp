@@ -106,7 +106,7 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
     Point3d m;
     for (int c = 0; c < 3; ++c) m[c] = 0.5 * (piece.p[i][c] + piece.p[j][c]);
     if (m == piece.p[i] || m == piece.p[j]) continue;  // no double left between them
-    const auto [dm2, near] = to.nearest(m);
+    const auto [dm2, near] = to.nearest(m, piece.best);
     const double dm = std::sqrt(dm2);
     lower = std::max(lower, dm);
     Piece a = piece, b = piece;
@@ -163,6 +163,14 @@ bool SurfaceDistance::empty() const { return impl_->triangles.empty(); }
 std::pair<double, std::size_t> SurfaceDistance::nearest(const Point3d& p) const {
   const K::Point_3 q = point(p);
   const auto hit = impl_->tree.closest_point_and_primitive(q);
+  return {CGAL::squared_distance(q, hit.first), static_cast<std::size_t>(hit.second - impl_->triangles.cbegin())};
+}
+
+std::pair<double, std::size_t> SurfaceDistance::nearest(const Point3d& p, std::size_t hint) const {
+  const K::Point_3 q = point(p);
+  const auto it = impl_->triangles.cbegin() + static_cast<std::ptrdiff_t>(hint);
+  const K::Point_3 start = K().construct_projected_point_3_object()(*it, q);
+  const auto hit = impl_->tree.closest_point_and_primitive(q, std::make_pair(start, it));
   return {CGAL::squared_distance(q, hit.first), static_cast<std::size_t>(hit.second - impl_->triangles.cbegin())};
 }
 

@@ -29,6 +29,8 @@ class SurfaceDistance {
   /// Squared distance from p to the surface, and the surface triangle that
   /// realises it (an index for squared_distance_to).
   std::pair<double, std::size_t> nearest(const Point3d& p) const;
+  /// The same, starting the search from triangle `hint` (one likely near p).
+  std::pair<double, std::size_t> nearest(const Point3d& p, std::size_t hint) const;
   /// Squared distance from p to surface triangle `t`.
   double squared_distance_to(const Point3d& p, std::size_t t) const;
   bool empty() const;
