@@ -124,8 +124,8 @@ at least 4x faster than CGAL end to end, peak memory under 1 GB.
 ## `polyheal degenerate` vs CGAL `PMP::experimental::remove_almost_degenerate_faces`
 
 Same thresholds: caps above 175 deg, needles below 5 deg (for CGAL: longest/shortest
-edge above 1/sin 5 deg, its needle measure), tolerance / collapse length 1 per mille of the
-bbox diagonal. "left" = zero-area faces + caps + needles in the output, decided by
+edge above 1/sin 5 deg, its needle measure), tolerance 1 per mille of the bbox diagonal
+(for CGAL: the longest edge it may collapse and the highest cap it may flip). "left" = zero-area faces + caps + needles in the output, decided by
 `polyheal check` on the written file. Hausdorff is relative to the bbox diagonal
 (polyheal: its bounded-error report; CGAL: `bounded_error_symmetric_Hausdorff_distance`).
 One run each, whole process (polyheal: read, repair, write, read back, certify).
