@@ -18,7 +18,8 @@ Shape classify_triangle(const Point& a, const Point& b, const Point& c, double c
 bool angle_to_plane_less(const Kernel::Vector_3& e, const Kernel::Vector_3& n, double sin_threshold);
 
 /// Index of the corner with the largest interior angle of the polygon
-/// (corners in order; exact comparison of the angles' cosines).
+/// (corners in order; exact comparison of the angles' cosines; ties to the
+/// lexicographically smallest point, whatever corner the list starts at).
 std::size_t largest_angle_corner(const std::vector<Point>& polygon);
 
 /// The class of face f of a triangle mesh.

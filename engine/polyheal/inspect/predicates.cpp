@@ -197,9 +197,12 @@ std::size_t largest_angle_corner(const std::vector<Point>& polygon) {
     const FT a = d[i] * d[i] * l[j], b = d[j] * d[j] * l[i];  // cos_i^2 vs cos_j^2, scaled
     return si == CGAL::POSITIVE ? a < b : b < a;
   };
+  // Ties go to the lexicographically smallest corner, so the answer does not
+  // depend on where the polygon's corner list starts (plane_slice plans a
+  // cut on one rotation and makes it on another).
   std::size_t best = 0;
   for (std::size_t k = 1; k < n; ++k)
-    if (cos_less(k, best)) best = k;
+    if (cos_less(k, best) || (!cos_less(best, k) && polygon[k] < polygon[best])) best = k;
   return best;
 }
 
