@@ -167,20 +167,27 @@ class Pipeline {
   /// decimation right after it uses them, and removes the cut's other points
   /// where they are not needed. At most `budget` slices. Returns the number
   /// of slices made.
-  std::size_t slice_needles(std::size_t budget) {
+  std::size_t slice_needles(std::size_t budget, bool short_cuts, bool second_longest) {
     std::size_t made = 0;
     for (face_descriptor needle : faces_of(Shape::needle)) {
       if (made >= budget) break;
       if (mesh_.is_removed(needle) || classify_face(mesh_, needle, cos_cap_, cos_needle_) != Shape::needle) continue;
-      halfedge_descriptor longest = mesh_.halfedge(needle);
-      Kernel::FT best = -1;
-      for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(needle), mesh_)) {
-        const Kernel::FT l = CGAL::squared_distance(mesh_.point(mesh_.source(h)), mesh_.point(mesh_.target(h)));
-        if (l > best) {
-          best = l;
-          longest = h;
+      // The plane is perpendicular to the needle's longest edge, or on
+      // alternate rounds to its second longest (the other long side), which
+      // cuts the neighbourhood differently when the first cut did not help.
+      std::array<halfedge_descriptor, 3> hs;
+      std::array<Kernel::FT, 3> len;
+      {
+        halfedge_descriptor h = mesh_.halfedge(needle);
+        for (int k = 0; k < 3; ++k, h = mesh_.next(h)) {
+          hs[k] = h;
+          len[k] = CGAL::squared_distance(mesh_.point(mesh_.source(h)), mesh_.point(mesh_.target(h)));
         }
       }
+      std::array<int, 3> order{0, 1, 2};
+      std::sort(order.begin(), order.end(), [&](int a, int b) { return len[a] > len[b]; });
+      const halfedge_descriptor longest = hs[order[second_longest ? 1 : 0]];
+      const Kernel::FT best = len[order[second_longest ? 1 : 0]];
       // Where exactly the cut runs does not matter, so the plane is put
       // through double approximations: its split points stay one exact
       // construction deep instead of nesting rationals slice after slice.
@@ -194,7 +201,15 @@ class Pipeline {
       so.cap_angle = o_.cap_angle;
       so.seed = needle;
       so.protected_vertices = {mesh_.source(longest), mesh_.target(longest)};
-      const detail::SliceResult s = detail::slice_by_plane(mesh_, Kernel::Plane_3(mid, q - p), so);
+      // A short cut: across the needle and its neighbours, not around the
+      // whole part (the verified plan refuses it if ending early would make a
+      // cap; then the cut runs its full course).
+      so.radius = short_cuts ? 1.5 * std::sqrt(CGAL::to_double(best)) : 0.0;
+      detail::SliceResult s = detail::slice_by_plane(mesh_, Kernel::Plane_3(mid, q - p), so);
+      if (s.rejected && so.radius > 0) {
+        so.radius = 0;
+        s = detail::slice_by_plane(mesh_, Kernel::Plane_3(mid, q - p), so);
+      }
       if (s.rejected || s.edges_split == 0) {
         ++r_.needle_slices_refused;
         continue;
@@ -309,13 +324,20 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   // sliceable now that their neighbourhood changed; stuck needles get local
   // supersampling. Bounded: slices per round at most twice the bad faces
   // left (plus a constant), at most 24 rounds, and three without progress.
+  // Needle cuts are short (across the needle's neighbourhood) while that
+  // makes progress, then run their full course.
   std::size_t bad = pipeline.bad_faces().size(), stalled = 0;
+  bool short_cuts = true;
   for (int round = 0; round < 24 && bad > 0 && stalled < 3; ++round) {
-    const std::size_t made = pipeline.slice_caps() + pipeline.slice_needles(2 * bad + 16);
+    const std::size_t made = pipeline.slice_caps() + pipeline.slice_needles(2 * bad + 16, short_cuts, round % 2 == 1);
     pipeline.decimate(pipeline.bad_faces());
-    if (made == 0) break;
     const std::size_t now = pipeline.bad_faces().size();
-    stalled = now < bad ? 0 : stalled + 1;  // three rounds without progress end it
+    if (now >= bad && short_cuts) {
+      short_cuts = false;  // not stalled yet: the full cuts get their rounds
+    } else {
+      if (made == 0) break;
+      stalled = now < bad ? 0 : stalled + 1;  // three rounds without progress end it
+    }
     bad = now;
   }
   pipeline.finish_stats();

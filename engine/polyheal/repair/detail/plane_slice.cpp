@@ -89,7 +89,11 @@ class Slicer {
 
   // Global: every cut face. Local: the connected cut curve through the seed,
   // followed across crossed edges and around on-plane vertices.
-  std::vector<face_descriptor> faces_to_cut() const {
+  static Point3d approx(const Point& p) {
+    return {CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())};
+  }
+
+  std::vector<face_descriptor> faces_to_cut() {
     std::vector<face_descriptor> out;
     if (o_.seed == Mesh::null_face()) {
       for (face_descriptor f : mesh_.faces())
@@ -106,16 +110,45 @@ class Slicer {
         queue.push_back(g);
       }
     };
+    // Beyond the radius the cut ends at the next vertex. Snapping only
+    // removes crossings, so every edge still crossed at the end was crossed
+    // when the search passed it, and both its faces are in the set.
+    std::vector<Point3d> centre;
+    for (vertex_descriptor v : CGAL::vertices_around_face(mesh_.halfedge(o_.seed), mesh_))
+      centre.push_back(approx(mesh_.point(v)));
+    auto far = [&](vertex_descriptor v) {
+      if (o_.radius <= 0) return false;
+      const Point3d p = approx(mesh_.point(v));
+      for (const Point3d& c : centre) {
+        const double dx = p[0] - c[0], dy = p[1] - c[1], dz = p[2] - c[2];
+        if (dx * dx + dy * dy + dz * dz <= o_.radius * o_.radius) return false;
+      }
+      return true;
+    };
     while (!queue.empty()) {
       const face_descriptor f = queue.front();
       queue.pop_front();
       out.push_back(f);
       for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_)) {
+        if (crossing(h) && far(mesh_.source(h)) && far(mesh_.target(h))) {
+          const vertex_descriptor u = mesh_.source(h), v = mesh_.target(h);
+          const bool pu = protected_[static_cast<std::size_t>(u)], pv = protected_[static_cast<std::size_t>(v)];
+          if (!(pu && pv)) {
+            const vertex_descriptor w =
+                pu ? v : pv ? u
+                   : CGAL::compare(CGAL::squared_distance(mesh_.point(u), plane_),
+                                   CGAL::squared_distance(mesh_.point(v), plane_)) != CGAL::LARGER ? u : v;
+            side_[static_cast<std::size_t>(w)] = 0;
+            ++result_.vertices_snapped;
+          }
+        }
         if (crossing(h)) visit(mesh_.face(mesh_.opposite(h)));
-        if (side(mesh_.target(h)) == 0)
+        if (side(mesh_.target(h)) == 0 && !far(mesh_.target(h)))
           for (face_descriptor g : CGAL::faces_around_target(h, mesh_)) visit(g);
       }
     }
+    // Faces the search took in that snapping has since left uncut are
+    // skipped by the plan and by cut_face (they have no two cut corners).
     return out;
   }
 

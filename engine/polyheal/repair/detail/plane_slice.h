@@ -43,6 +43,12 @@ struct SliceOptions {
   /// (both faces of every split edge lie on it, so the mesh stays consistent).
   /// Null: the whole mesh (the paper's global slice).
   face_descriptor seed = Mesh::null_face();
+  /// Local mode only, when positive: beyond this distance from the seed's
+  /// corners the cut is ended at the next vertex — the crossed edge's
+  /// endpoint nearer the plane is snapped onto it (classification only, as
+  /// the safeguard does; nothing moves) instead of the edge being split. The
+  /// verified plan still refuses a would-be cap.
+  double radius = 0.0;
   /// Compute every piece first and refuse the slice (mesh untouched) when a
   /// face that is not a cap would leave a cap piece, a cap would leave two,
   /// or a piece would have zero area — possible only through snapping, whose
