@@ -142,7 +142,19 @@ class Pipeline {
       so.cap_angle = o_.cap_angle;
       if (!o_.global_slices) so.seed = cap;
       const Kernel::Plane_3 plane = detail::cap_plane(mesh_, cap, so);
-      const detail::SliceResult s = detail::slice_by_plane(mesh_, plane, so);
+      // Local mode cuts short first: across the cap and its neighbours,
+      // ended beyond 1.5 long edges (B and C are protected, so the cap's own
+      // long edge is always split); if that plan would make a cap, the cut
+      // follows its whole connected course.
+      detail::SliceResult s;
+      if (!o_.global_slices) {
+        const Point& b = mesh_.point(so.protected_vertices[0]);
+        const Point& c = mesh_.point(so.protected_vertices[1]);
+        so.radius = 1.5 * std::sqrt(CGAL::to_double(CGAL::squared_distance(b, c)));
+        s = detail::slice_by_plane(mesh_, plane, so);
+        so.radius = 0;
+      }
+      if (o_.global_slices || s.rejected) s = detail::slice_by_plane(mesh_, plane, so);
       if (s.rejected) {
         ++r_.cap_slices_refused;
         if (static_cast<std::size_t>(cap) >= refused.size()) refused.resize(static_cast<std::size_t>(cap) + 1, 0);

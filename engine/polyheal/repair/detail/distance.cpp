@@ -158,6 +158,16 @@ double SurfaceDistance::squared_distance(const Point3d& p, const Point3d& hint) 
   return CGAL::squared_distance(q, impl_->tree.closest_point(q, point(hint)));
 }
 
+std::vector<std::size_t> SurfaceDistance::triangles_near(const Point3d& lo, const Point3d& hi) const {
+  std::vector<std::size_t> out;
+  if (impl_->triangles.empty()) return out;
+  std::vector<Triangles::const_iterator> hits;
+  impl_->tree.all_intersected_primitives(CGAL::Bbox_3(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]),
+                                         std::back_inserter(hits));
+  for (auto it : hits) out.push_back(static_cast<std::size_t>(it - impl_->triangles.cbegin()));
+  return out;
+}
+
 bool SurfaceDistance::empty() const { return impl_->triangles.empty(); }
 
 std::pair<double, std::size_t> SurfaceDistance::nearest(const Point3d& p) const {

@@ -8,6 +8,7 @@
 
 #include <memory>
 #include <utility>
+#include <vector>
 
 #include "polyheal/mesh/soup.h"
 
@@ -33,6 +34,9 @@ class SurfaceDistance {
   std::pair<double, std::size_t> nearest(const Point3d& p, std::size_t hint) const;
   /// Squared distance from p to surface triangle `t`.
   double squared_distance_to(const Point3d& p, std::size_t t) const;
+  /// Indices of the surface triangles whose bounding boxes meet the box
+  /// [lo, hi] (candidates for squared_distance_to).
+  std::vector<std::size_t> triangles_near(const Point3d& lo, const Point3d& hi) const;
   bool empty() const;
 
  private:

@@ -150,6 +150,12 @@ struct ShapeDecimator::Impl {
   /// (and a collapse's own removed vertex) near the new triangles.
   bool within_tolerance(const Plan& plan) const {
     bool ok = true;
+    // "Within the tolerance" needs one input triangle close enough, not the
+    // nearest: test the input triangles near the new faces, stopping at the
+    // first that is (the last one found first: neighbouring samples share it).
+    std::vector<std::size_t> near;
+    std::size_t last = 0;
+    bool have_near = false;
     for (const Triple& t : plan.proposed) {
       // Every vertex lies on the input surface, so a triangle no longer than
       // the tolerance is within it everywhere; longer ones are sampled.
@@ -159,22 +165,39 @@ struct ShapeDecimator::Impl {
         longest2 = std::max(longest2, dot(d, d));
       }
       if (longest2 <= tol2) continue;
+      if (!have_near) {
+        Point3d lo = approx(plan.proposed[0][0]), hi = lo;
+        for (const Triple& u : plan.proposed)
+          for (vertex_descriptor v : u)
+            for (int d = 0; d < 3; ++d) {
+              lo[d] = std::min(lo[d], approx(v)[d]);
+              hi[d] = std::max(hi[d], approx(v)[d]);
+            }
+        const double r = std::sqrt(tol2);
+        for (int d = 0; d < 3; ++d) {
+          lo[d] -= r;
+          hi[d] += r;
+        }
+        near = input.triangles_near(lo, hi);
+        have_near = true;
+      }
       const int steps = std::min(6, 1 + static_cast<int>(std::sqrt(longest2 / tol2)));
       const std::array<Point3d, 3> corner{approx(t[0]), approx(t[1]), approx(t[2])};
       for_each_sample(t, steps, [&](const Point3d& p) {
         if (!ok) return;
-        // The corners lie on the input: a sample within the tolerance of
-        // one needs no query, and the nearest corner is the query's hint.
-        double near2 = std::numeric_limits<double>::infinity();
-        const Point3d* hint = &corner[0];
+        // The corners lie on the input: a sample within the tolerance of one
+        // needs no search.
         for (const Point3d& c : corner) {
           const Point3d d = p - c;
-          if (dot(d, d) < near2) {
-            near2 = dot(d, d);
-            hint = &c;
-          }
+          if (dot(d, d) <= tol2) return;
         }
-        if (near2 > tol2 && input.squared_distance(p, *hint) > tol2) ok = false;
+        if (!near.empty() && input.squared_distance_to(p, near[last]) <= tol2) return;
+        for (std::size_t i = 0; i < near.size(); ++i)
+          if (input.squared_distance_to(p, near[i]) <= tol2) {
+            last = i;
+            return;
+          }
+        ok = false;
       });
       if (!ok) return false;
     }
