@@ -75,7 +75,8 @@ TEST_CASE("write: STL says when it rounded doubles to float", "[io]") {
 
 TEST_CASE("write: refuses to overwrite unless asked, and never clobbers the input", "[io][smoke]") {
   const Soup s = test::tetrahedron();
-  const std::string path = scratch("existing.off");
+  // its own directory: tests running in parallel write next to each other
+  const std::string path = scratch("write_overwrite/existing.off");
   write_soup(s, path);
   const Soup other = test::tetrahedron(5, 0, 0);
   CHECK_THROWS_AS(write_soup(other, path), OutputError);

@@ -35,6 +35,7 @@ std::string scratch(const std::string& name) {
   const std::filesystem::path dir = std::filesystem::path(POLYHEAL_BINARY_DIR) / "test-scratch";
   std::filesystem::create_directories(dir);
   const std::filesystem::path p = dir / name;
+  std::filesystem::create_directories(p.parent_path());
   std::filesystem::remove_all(p);
   return p.string();
 }
