@@ -30,9 +30,9 @@ ShapeCounts shape_counts(const Report& r) { return {r.degenerate_faces.size(), r
 SurfaceTopology topology_of(const Report& r) {
   SurfaceTopology t;
   const long used = long(r.vertices) - long(r.isolated_vertices) - long(r.merged_identical_vertices);
-  std::size_t corners = 0;  // every face is a triangle here; count anyway
-  corners = 3 * r.faces + r.non_triangle_faces * 0;
-  const long edges = (long(corners) + long(r.boundary_edges.size())) / 2;
+  // Triangles only here (polygons are refused): each interior edge has two
+  // face sides, each boundary edge one.
+  const long edges = (3 * long(r.faces) + long(r.boundary_edges.size())) / 2;
   t.euler = used - edges + long(r.faces);
   t.components = r.components;
   t.boundary_loops = r.boundary_loops;
