@@ -68,6 +68,7 @@ nlohmann::json to_json(const DegenerateArgs& a, const DegenerateReport& r, doubl
       {"faces",
        {{"input", r.faces_in},
         {"repeated_index_removed", r.repeated_index_faces},
+        {"pinch_vertex_copies", r.pinched_vertices_split},
         {"after_zero_area", r.faces_after_zero_area},
         {"after_slicing", r.faces_after_slicing},
         {"peak", r.peak_faces},

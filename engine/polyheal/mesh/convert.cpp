@@ -1,5 +1,7 @@
 #include "polyheal/mesh/convert.h"
 
+#include <algorithm>
+
 #include <cstring>
 #include <type_traits>
 #include <unordered_map>
@@ -34,10 +36,98 @@ double nearest_double(const Kernel::FT& x) {
 
 }  // namespace
 
-MeshBuildResult soup_to_mesh(const Soup& input, Mesh& mesh) {
+namespace {
+
+/// Gives each fan of each listed vertex but the first its own copy.
+Soup split_fans(const Soup& soup, const std::vector<Index>& pinched, std::size_t& added) {
+  Soup out = soup;
+  std::vector<char> is_pinched(soup.points.size(), 0);
+  for (Index v : pinched) is_pinched[v] = 1;
+  // corners (face, position) at pinched vertices, joined when their faces
+  // share an edge at the vertex
+  struct Corner {
+    std::size_t face, k;
+  };
+  std::vector<std::vector<Corner>> corners(soup.points.size());
+  for (std::size_t f = 0; f < soup.face_count(); ++f) {
+    const FaceView face = soup.face(f);
+    for (std::size_t k = 0; k < face.size(); ++k)
+      if (is_pinched[face[k]]) corners[face[k]].push_back({f, k});
+  }
+  added = 0;
+  for (Index v : pinched) {
+    const std::vector<Corner>& cs = corners[v];
+    std::vector<std::size_t> parent(cs.size());
+    for (std::size_t i = 0; i < cs.size(); ++i) parent[i] = i;
+    auto find = [&](std::size_t i) {
+      while (parent[i] != i) i = parent[i] = parent[parent[i]];
+      return i;
+    };
+    std::vector<std::pair<Index, std::size_t>> by_neighbour;  // (vertex next to v, corner)
+    for (std::size_t i = 0; i < cs.size(); ++i) {
+      const FaceView face = soup.face(cs[i].face);
+      const std::size_t n = face.size();
+      by_neighbour.push_back({face[(cs[i].k + 1) % n], i});
+      by_neighbour.push_back({face[(cs[i].k + n - 1) % n], i});
+    }
+    std::sort(by_neighbour.begin(), by_neighbour.end());
+    for (std::size_t j = 1; j < by_neighbour.size(); ++j)
+      if (by_neighbour[j].first == by_neighbour[j - 1].first)
+        parent[find(by_neighbour[j].second)] = find(by_neighbour[j - 1].second);
+    std::vector<Index> copy(cs.size(), v);
+    std::vector<char> named(cs.size(), 0);
+    bool first = true;
+    for (std::size_t i = 0; i < cs.size(); ++i) {
+      const std::size_t root = find(i);
+      if (!named[root]) {
+        named[root] = 1;
+        if (first) {
+          copy[root] = v;
+          first = false;
+        } else {
+          copy[root] = static_cast<Index>(out.points.size());
+          out.points.push_back(soup.points[v]);
+          ++added;
+        }
+      }
+      out.indices[out.offsets[cs[i].face] + cs[i].k] = copy[root];
+    }
+  }
+  return out;
+}
+
+std::vector<Index> identity(std::size_t n) {
+  std::vector<Index> v(n);
+  for (std::size_t i = 0; i < n; ++i) v[i] = static_cast<Index>(i);
+  return v;
+}
+
+MeshBuildResult build_mesh(const Soup& input, Mesh& mesh, bool weld_points);
+
+}  // namespace
+
+MeshBuildResult soup_to_mesh_splitting_pinches(const Soup& input, Mesh& mesh, std::size_t* split) {
+  const Weld weld = weld_identical_points(input.points);
+  const Soup soup = weld.merged ? apply_weld(input, weld) : input;
+  const Topology t = analyze_topology(soup);
+  std::size_t added = 0;
+  if (!t.nonmanifold_vertices.empty() && t.nonmanifold_edges.empty()) {
+    const Soup fans = split_fans(soup, t.nonmanifold_vertices, added);
+    if (split) *split = added;
+    return build_mesh(fans, mesh, false);
+  }
+  if (split) *split = 0;
+  return build_mesh(soup, mesh, false);
+}
+
+MeshBuildResult soup_to_mesh(const Soup& input, Mesh& mesh) { return build_mesh(input, mesh, true); }
+
+namespace {
+
+MeshBuildResult build_mesh(const Soup& input, Mesh& mesh, bool weld_points) {
   mesh.clear();
   MeshBuildResult r;
-  const Weld weld = weld_identical_points(input.points);
+  const Weld weld = weld_points ? weld_identical_points(input.points) : Weld{identity(input.points.size()), 0};
   const Soup soup = weld.merged ? apply_weld(input, weld) : input;
   const Topology t = analyze_topology(soup);
   for (std::size_t f : t.repeated_index_faces) r.problems.push_back("face " + std::to_string(f) + " repeats a vertex");
@@ -75,6 +165,8 @@ MeshBuildResult soup_to_mesh(const Soup& input, Mesh& mesh) {
   r.ok = true;
   return r;
 }
+
+}  // namespace
 
 Soup mesh_to_soup(const Mesh& mesh) {
   Soup s;

@@ -21,6 +21,13 @@ struct MeshBuildResult {
 /// lists every problem. Each face's input id goes to the kFaceOrigin property.
 MeshBuildResult soup_to_mesh(const Soup& soup, Mesh& mesh);
 
+/// The same, except that a vertex whose faces form several fans (a pinch
+/// point, non-manifold) is not a problem: each fan gets its own copy of the
+/// vertex, at the same position. Written out and read back, the copies weld
+/// into one point again. `split` (if given) receives the number of copies
+/// added.
+MeshBuildResult soup_to_mesh_splitting_pinches(const Soup& soup, Mesh& mesh, std::size_t* split = nullptr);
+
 /// The mesh as a soup, each exact coordinate rounded to the nearest double
 /// (ties to even; certify after rounding: check the result, not the mesh).
 /// Vertices are renumbered densely.

@@ -42,6 +42,15 @@ inline InputKernel::Point_3 to_input_point(const Point& p) {
   return {a.x().inf(), a.y().inf(), a.z().inf()};
 }
 
+/// Name of the vertex property (char) marking vertices no repair may remove
+/// (the copies of a split pinch point: removing one would tear it apart).
+inline constexpr const char* kVertexPinned = "v:polyheal_pinned";
+inline std::optional<Mesh::Property_map<vertex_descriptor, char>> vertex_pinned_map(const Mesh& mesh) {
+  const auto [map, found] = mesh.property_map<vertex_descriptor, char>(kVertexPinned);
+  if (!found) return std::nullopt;
+  return map;
+}
+
 using FaceOriginMap = Mesh::Property_map<face_descriptor, std::int64_t>;
 
 /// Name of the face property (char) marking faces that lie in the input

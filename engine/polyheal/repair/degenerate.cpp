@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <map>
 #include <cmath>
 
 #include "polyheal/inspect/exact_predicates.h"
@@ -75,6 +76,7 @@ class Pipeline {
     cos_cap_ = std::cos(o.cap_angle * kPi / 180.0);
     cos_needle_ = std::cos(o.needle_angle * kPi / 180.0);
     snap_ = 0.1 * r.tolerance;
+    face_limit_ = 2 * mesh.number_of_faces() + 64;
   }
 
   std::vector<face_descriptor> faces_of(Shape shape) const {
@@ -123,6 +125,8 @@ class Pipeline {
         ++(done ? r_.grid_slices : r_.grid_slices_refused);
       }
     }
+    // the supersampled mesh is the new reference for needle supersampling
+    face_limit_ = std::max<std::size_t>(face_limit_, 2 * mesh_.number_of_faces() + 64);
   }
 
   /// §3-4: one slice per cap, until every cap is gone or refused.
@@ -182,7 +186,10 @@ class Pipeline {
   std::size_t slice_needles(std::size_t budget, bool short_cuts, bool second_longest) {
     std::size_t made = 0;
     for (face_descriptor needle : faces_of(Shape::needle)) {
-      if (made >= budget) break;
+      // Supersampling that keeps failing only grows the mesh (typically
+      // where the input self-intersects and no operation there is allowed):
+      // stop at twice the input's size and report what is left.
+      if (made >= budget || mesh_.number_of_faces() > face_limit_) break;
       if (mesh_.is_removed(needle) || classify_face(mesh_, needle, cos_cap_, cos_needle_) != Shape::needle) continue;
       // The plane is perpendicular to the needle's longest edge, or on
       // alternate rounds to its second longest (the other long side), which
@@ -273,6 +280,7 @@ class Pipeline {
   LocalIndex index_;
   detail::ShapeDecimator decimator_;
   double cos_cap_ = 0, cos_needle_ = 0, snap_ = 0;
+  std::size_t face_limit_ = 0;  // needle supersampling stops beyond it
 };
 
 }  // namespace
@@ -301,12 +309,25 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   r.tolerance = o.tolerance >= 0 ? o.tolerance : o.tolerance_ratio * r.bbox_diagonal;
   if (!clean.is_triangle_soup()) throw UnsupportedInput("not a triangle mesh (polygons with more than 3 corners)");
   Mesh mesh;
-  const MeshBuildResult built = soup_to_mesh(clean, mesh);
+  // Pinch points (vertices whose faces form several fans, common in CAD
+  // STL exports) get one copy per fan; the copies weld again on output.
+  const MeshBuildResult built = soup_to_mesh_splitting_pinches(clean, mesh, &r.pinched_vertices_split);
   if (!built.ok)
     throw UnsupportedInput("not an oriented 2-manifold mesh: " + built.problems.front() +
                            (built.problems.size() > 1 ? " (and " + std::to_string(built.problems.size() - 1) +
                                                             " more problems)"
                                                       : ""));
+  if (r.pinched_vertices_split > 0) {  // the copies (and their originals) must stay
+    auto pinned = mesh.add_property_map<vertex_descriptor, char>(kVertexPinned, 0).first;
+    std::map<std::array<double, 3>, std::vector<vertex_descriptor>> at;
+    for (vertex_descriptor v : mesh.vertices()) {
+      const Point& p = mesh.point(v);
+      at[{CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())}].push_back(v);
+    }
+    for (const auto& [p, vs] : at)
+      if (vs.size() > 1)
+        for (vertex_descriptor v : vs) pinned[v] = 1;
+  }
   const detail::SurfaceDistance distance(clean);
   Pipeline pipeline(mesh, distance, o, r);
   r.seconds_preprocess = seconds_since(t0);

@@ -86,6 +86,7 @@ struct DegenerateReport {
   bool global_slices = false, interleave = true;
   // input
   std::size_t faces_in = 0, repeated_index_faces = 0;
+  std::size_t pinched_vertices_split = 0;  // copies made for pinch points (welded again on output)
   ShapeCounts before;
   std::size_t self_intersections_in = 0;
   SurfaceTopology topology_in;

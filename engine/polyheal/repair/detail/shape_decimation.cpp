@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <queue>
 #include <unordered_map>
 
@@ -73,6 +74,7 @@ struct ShapeDecimator::Impl {
   };
 
   FaceFlagMap on_input;
+  std::optional<Mesh::Property_map<vertex_descriptor, char>> pinned;  // kVertexPinned, if present
   std::vector<char> sticky;  // by vertex index: split points of the slice being tidied
   bool is_sticky(vertex_descriptor v) const {
     return static_cast<std::size_t>(v) < sticky.size() && sticky[static_cast<std::size_t>(v)];
@@ -82,6 +84,7 @@ struct ShapeDecimator::Impl {
 
   Impl(Mesh& m, LocalIndex& i, const SurfaceDistance& d, const DecimationOptions& opt)
       : mesh(m), index(i), input(d), o(opt), on_input(face_on_input_map(m)),
+        pinned(vertex_pinned_map(m)),
         approx_point(m.add_property_map<vertex_descriptor, Point3d>(
                           "v:polyheal_approx", Point3d{std::nan(""), 0.0, 0.0}).first) {
     cos_cap = std::cos(o.cap_angle * kPi / 180.0);
@@ -248,6 +251,7 @@ struct ShapeDecimator::Impl {
   /// Collapse of h: source u goes, target v stays.
   bool plan_collapse(halfedge_descriptor h, Plan& plan, bool simplify = false) const {
     const vertex_descriptor u = mesh.source(h), v = mesh.target(h);
+    if (pinned && (*pinned)[u]) return false;  // a pinch point's copy stays where its twins are
     const auto e = mesh.edge(h);
     if (!CGAL::Euler::does_satisfy_link_condition(e, mesh)) return false;
     const bool border_edge = mesh.is_border(e);
