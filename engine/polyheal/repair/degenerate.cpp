@@ -76,7 +76,7 @@ class Pipeline {
     cos_cap_ = std::cos(o.cap_angle * kPi / 180.0);
     cos_needle_ = std::cos(o.needle_angle * kPi / 180.0);
     snap_ = 0.1 * r.tolerance;
-    face_limit_ = 2 * mesh.number_of_faces() + 64;
+    face_limit_ = 3 * mesh.number_of_faces() + 64;
   }
 
   std::vector<face_descriptor> faces_of(Shape shape) const {
@@ -126,7 +126,7 @@ class Pipeline {
       }
     }
     // the supersampled mesh is the new reference for needle supersampling
-    face_limit_ = std::max<std::size_t>(face_limit_, 2 * mesh_.number_of_faces() + 64);
+    face_limit_ = std::max<std::size_t>(face_limit_, 3 * mesh_.number_of_faces() + 64);
   }
 
   /// §3-4: one slice per cap, until every cap is gone or refused.
@@ -188,7 +188,7 @@ class Pipeline {
     for (face_descriptor needle : faces_of(Shape::needle)) {
       // Supersampling that keeps failing only grows the mesh (typically
       // where the input self-intersects and no operation there is allowed):
-      // stop at twice the input's size and report what is left.
+      // stop at three times the input's size and report what is left.
       if (made >= budget || mesh_.number_of_faces() > face_limit_) break;
       if (mesh_.is_removed(needle) || classify_face(mesh_, needle, cos_cap_, cos_needle_) != Shape::needle) continue;
       // The plane is perpendicular to the needle's longest edge, or on
