@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <map>
 #include <set>
 
 #include "polyheal/inspect/report.h"
@@ -19,14 +20,18 @@ using namespace polyheal;
 
 namespace {
 
-/// V - E + F of a triangle soup, counting points that faces use.
+/// V - E + F of a triangle soup, identical points counted once (as a
+/// reader welds them), counting points that faces use.
 long euler_characteristic(const Soup& s) {
+  std::map<Point3d, Index> id;
+  for (const Point3d& p : s.points) id.emplace(p, static_cast<Index>(id.size()));
+  auto at = [&](Index i) { return id.at(s.points[i]); };
   std::set<std::pair<Index, Index>> edges;
   std::set<Index> used;
   for (std::size_t f = 0; f < s.face_count(); ++f) {
     const FaceView face = s.face(f);
     for (std::size_t k = 0; k < face.size(); ++k) {
-      const Index a = face[k], b = face[(k + 1) % face.size()];
+      const Index a = at(face[k]), b = at(face[(k + 1) % face.size()]);
       edges.insert({std::min(a, b), std::max(a, b)});
       used.insert(a);
     }
@@ -43,7 +48,10 @@ void check_repaired(const Soup& input, const Soup& output, const DegenerateRepor
   CHECK(out.caps.empty());
   CHECK(out.needles.empty());
   // topology as the input's
-  CHECK(out.manifold);
+  // as the input once repeated-index faces are gone; pinch vertices stay
+  CHECK((out.manifold && out.oriented) == r.topology_in.manifold);
+  CHECK(out.nonmanifold_vertices.size() <= in.nonmanifold_vertices.size());
+  CHECK(out.nonmanifold_edges.empty());
   CHECK(out.oriented);
   CHECK(out.closed == in.closed);
   CHECK(out.components == in.components);
@@ -114,6 +122,22 @@ TEST_CASE("degenerate: a T-junction closed by an exactly collinear face", "[repa
   CHECK(r.report.before.zero_area == 1);
   CHECK(r.report.collapses + r.report.flips >= 1);
   CHECK(inspect(r.soup).certified_clean());  // the crack is gone, nothing else changed
+}
+
+TEST_CASE("degenerate: a pinch vertex is split per fan, repaired around, and welded again", "[repair]") {
+  // The T-junction tetrahedron and a small tetrahedron whose corner is its
+  // apex (0,0,2): after welding, that vertex has two fans (non-manifold).
+  const Soup tj = test::soup({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0, 0, 2}, {1, 0, 0}},
+                             {{2, 1, 4}, {2, 4, 0}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}, {1, 0, 4}});
+  const Soup input = test::concat(tj, test::tetrahedron(0, 0, 2));
+  REQUIRE(inspect(input).nonmanifold_vertices.size() == 1);
+  REQUIRE(inspect(input).degenerate_faces.size() == 1);
+  const DegenerateResult r = run(input);
+  CHECK(r.report.pinched_vertices_split == 1);
+  const Report out = inspect(r.soup);
+  CHECK(out.nonmanifold_vertices.size() == 1);  // the pinch is still one point
+  CHECK(out.components == 2);
+  CHECK(out.self_intersections.empty());
 }
 
 TEST_CASE("degenerate: faces with a repeated vertex index are removed topologically", "[repair]") {
