@@ -11,6 +11,8 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
 
+#include "polyheal/mesh/soup.h"
+
 #include <cstdint>
 #include <optional>
 
@@ -49,6 +51,13 @@ inline std::optional<Mesh::Property_map<vertex_descriptor, char>> vertex_pinned_
   const auto [map, found] = mesh.property_map<vertex_descriptor, char>(kVertexPinned);
   if (!found) return std::nullopt;
   return map;
+}
+
+/// p's coordinates as doubles, each within the lazy kernel's interval
+/// approximation (a measurement or a hint, not a certified rounding: that is
+/// mesh_to_soup's nearest-double rounding).
+inline Point3d approx_point3d(const Point& p) {
+  return {CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())};
 }
 
 using FaceOriginMap = Mesh::Property_map<face_descriptor, std::int64_t>;

@@ -24,7 +24,10 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-Point rounded(const Point& p) { return Point(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())); }
+Point rounded(const Point& p) {
+  const Point3d d = approx_point3d(p);
+  return Point(d[0], d[1], d[2]);
+}
 
 ShapeCounts shape_counts(const Report& r) { return {r.degenerate_faces.size(), r.caps.size(), r.needles.size()}; }
 
@@ -321,8 +324,7 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
     auto pinned = mesh.add_property_map<vertex_descriptor, char>(kVertexPinned, 0).first;
     std::map<std::array<double, 3>, std::vector<vertex_descriptor>> at;
     for (vertex_descriptor v : mesh.vertices()) {
-      const Point& p = mesh.point(v);
-      at[{CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())}].push_back(v);
+      at[approx_point3d(mesh.point(v))].push_back(v);
     }
     for (const auto& [p, vs] : at)
       if (vs.size() > 1)

@@ -132,7 +132,20 @@ Soup soup_of(const std::vector<Corners>& triangles) {
   return s;
 }
 
+/// Squared distance to a triangle; a zero-area one counts as its edges.
+double distance2(const K::Point_3& q, const K::Triangle_3& t) {
+  if (t.is_degenerate())
+    return std::min({CGAL::squared_distance(q, K::Segment_3(t[0], t[1])),
+                     CGAL::squared_distance(q, K::Segment_3(t[1], t[2])),
+                     CGAL::squared_distance(q, K::Segment_3(t[2], t[0]))});
+  return CGAL::squared_distance(q, t);
+}
+
 }  // namespace
+
+double squared_distance_to_triangle(const Point3d& p, const Point3d& a, const Point3d& b, const Point3d& c) {
+  return distance2(point(p), K::Triangle_3(point(a), point(b), point(c)));
+}
 
 struct SurfaceDistance::Impl {
   Triangles triangles;
@@ -185,13 +198,7 @@ std::pair<double, std::size_t> SurfaceDistance::nearest(const Point3d& p, std::s
 }
 
 double SurfaceDistance::squared_distance_to(const Point3d& p, std::size_t t) const {
-  const K::Triangle_3& tri = impl_->triangles[t];
-  if (tri.is_degenerate()) {
-    return std::min({CGAL::squared_distance(point(p), K::Segment_3(tri[0], tri[1])),
-                     CGAL::squared_distance(point(p), K::Segment_3(tri[1], tri[2])),
-                     CGAL::squared_distance(point(p), K::Segment_3(tri[2], tri[0]))});
-  }
-  return CGAL::squared_distance(point(p), tri);
+  return distance2(point(p), impl_->triangles[t]);
 }
 
 double SurfaceDistance::squared_distance(const Point3d& p) const {

@@ -44,6 +44,10 @@ class SurfaceDistance {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Squared distance from p to triangle abc, a zero-area triangle counting as
+/// its edges (doubles; a measurement).
+double squared_distance_to_triangle(const Point3d& p, const Point3d& a, const Point3d& b, const Point3d& c);
+
 /// Symmetric Hausdorff distance between two triangle soups, with bounded
 /// error: the true distance lies in [result, result + error_bound] (up to
 /// double rounding in the distance queries). Each direction bisects

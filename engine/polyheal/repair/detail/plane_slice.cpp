@@ -89,10 +89,6 @@ class Slicer {
 
   // Global: every cut face. Local: the connected cut curve through the seed,
   // followed across crossed edges and around on-plane vertices.
-  static Point3d approx(const Point& p) {
-    return {CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())};
-  }
-
   std::vector<face_descriptor> faces_to_cut() {
     std::vector<face_descriptor> out;
     if (o_.seed == Mesh::null_face()) {
@@ -115,10 +111,10 @@ class Slicer {
     // when the search passed it, and both its faces are in the set.
     std::vector<Point3d> centre;
     for (vertex_descriptor v : CGAL::vertices_around_face(mesh_.halfedge(o_.seed), mesh_))
-      centre.push_back(approx(mesh_.point(v)));
+      centre.push_back(approx_point3d(mesh_.point(v)));
     auto far = [&](vertex_descriptor v) {
       if (o_.radius <= 0) return false;
-      const Point3d p = approx(mesh_.point(v));
+      const Point3d p = approx_point3d(mesh_.point(v));
       for (const Point3d& c : centre) {
         const double dx = p[0] - c[0], dy = p[1] - c[1], dz = p[2] - c[2];
         if (dx * dx + dy * dy + dz * dz <= o_.radius * o_.radius) return false;

@@ -40,18 +40,6 @@ double quality(const Point3d& a, const Point3d& b, const Point3d& c) {
   return std::min(lo, 180.0 - hi);
 }
 
-/// Squared distance from p to triangle abc (doubles; a measurement).
-double squared_distance_to_triangle(const Point3d& p, const Point3d& a, const Point3d& b, const Point3d& c) {
-  const InputKernel::Triangle_3 t({a[0], a[1], a[2]}, {b[0], b[1], b[2]}, {c[0], c[1], c[2]});
-  const InputKernel::Point_3 q(p[0], p[1], p[2]);
-  if (t.is_degenerate()) {
-    return std::min({CGAL::squared_distance(q, InputKernel::Segment_3(t[0], t[1])),
-                     CGAL::squared_distance(q, InputKernel::Segment_3(t[1], t[2])),
-                     CGAL::squared_distance(q, InputKernel::Segment_3(t[0], t[2]))});
-  }
-  return CGAL::squared_distance(q, t);
-}
-
 }  // namespace
 
 struct ShapeDecimator::Impl {
@@ -98,10 +86,7 @@ struct ShapeDecimator::Impl {
 
   const Point3d& approx(vertex_descriptor v) const {
     Point3d& a = const_cast<Mesh::Property_map<vertex_descriptor, Point3d>&>(approx_point)[v];
-    if (std::isnan(a[0])) {
-      const Point& p = mesh.point(v);
-      a = {CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())};
-    }
+    if (std::isnan(a[0])) a = approx_point3d(mesh.point(v));
     return a;
   }
 
