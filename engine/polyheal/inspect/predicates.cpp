@@ -133,6 +133,9 @@ Shape classify_with(const P& a, const P& b, const P& c, Collinear collinear, Gre
 
 }  // namespace
 
+double cos_degrees(double degrees) { return std::cos(degrees * 3.14159265358979323846 / 180.0); }
+double sin_degrees(double degrees) { return std::sin(degrees * 3.14159265358979323846 / 180.0); }
+
 Shape classify_triangle(const Point3d& a, const Point3d& b, const Point3d& c, double cos_cap, double cos_needle) {
   return classify_with(
       a, b, c, is_collinear,

@@ -16,6 +16,11 @@ namespace polyheal {
 /// a degenerate triangle has exactly collinear (or repeated) corners.
 enum class Shape : char { fine, degenerate, cap, needle };
 
+/// Angle thresholds are given in degrees and enter the predicates as cosines
+/// (or sines); one conversion for every caller.
+double cos_degrees(double degrees);
+double sin_degrees(double degrees);
+
 /// Classifies triangle abc exactly; thresholds enter as cosines.
 Shape classify_triangle(const Point3d& a, const Point3d& b, const Point3d& c, double cos_cap, double cos_needle);
 

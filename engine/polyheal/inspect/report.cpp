@@ -25,8 +25,6 @@ EdgeRef ref(const Edge& e) {
   return r;
 }
 
-constexpr double kPi = 3.14159265358979323846;
-
 void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions& o, Report& r);
 
 }  // namespace
@@ -91,8 +89,8 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
   // Shape of each face (fan triangles of polygons), exactly; in parallel.
   t0 = std::chrono::steady_clock::now();
   if (o.observer) o.observer->stage("degenerate faces, caps, needles");
-  const double cos_cap = std::cos(o.cap_angle * kPi / 180.0);
-  const double cos_needle = std::cos(o.needle_angle * kPi / 180.0);
+  const double cos_cap = cos_degrees(o.cap_angle);
+  const double cos_needle = cos_degrees(o.needle_angle);
   std::vector<Shape> shape(r.faces, Shape::fine);
   std::vector<char> near_degenerate(r.faces, 0);
   auto classify_face = [&](std::size_t f) {
@@ -118,7 +116,7 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
   std::sort(r.degenerate_faces.begin(), r.degenerate_faces.end());
 
   // TetGen: adjacent triangles folded onto each other below its angle bound.
-  const double cos_fold = std::cos(o.tetgen_fold_angle * kPi / 180.0);
+  const double cos_fold = cos_degrees(o.tetgen_fold_angle);
   auto sharp_fold = [&](const Topology::InteriorEdge& e) {
     FaceView f0 = soup.face(e.face0), f1 = soup.face(e.face1);
     if (f0.size() != 3 || f1.size() != 3 || shape[e.face0] == Shape::degenerate || shape[e.face1] == Shape::degenerate)

@@ -18,8 +18,6 @@
 namespace polyheal {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -76,8 +74,8 @@ class Pipeline {
  public:
   Pipeline(Mesh& mesh, const detail::SurfaceDistance& input, const DegenerateOptions& o, DegenerateReport& r)
       : mesh_(mesh), o_(o), r_(r), index_(mesh), decimator_(mesh, index_, input, decimation_options(o, r)) {
-    cos_cap_ = std::cos(o.cap_angle * kPi / 180.0);
-    cos_needle_ = std::cos(o.needle_angle * kPi / 180.0);
+    cos_cap_ = cos_degrees(o.cap_angle);
+    cos_needle_ = cos_degrees(o.needle_angle);
     snap_ = 0.1 * r.tolerance;
     face_limit_ = 3 * mesh.number_of_faces() + 64;
   }
@@ -381,7 +379,7 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   // 5. round and certify
   t0 = std::chrono::steady_clock::now();
   if (o.observer) o.observer->stage("certifying");
-  const double cos_cap = std::cos(o.cap_angle * kPi / 180.0), cos_needle = std::cos(o.needle_angle * kPi / 180.0);
+  const double cos_cap = cos_degrees(o.cap_angle), cos_needle = cos_degrees(o.needle_angle);
   for (face_descriptor f : mesh.faces())  // mesh_to_soup keeps this face order
     r.exact_bad.push_back(classify_face(mesh, f, cos_cap, cos_needle) != Shape::fine);
   result.soup = mesh_to_soup(mesh);

@@ -12,8 +12,6 @@
 namespace polyheal::detail {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 class Slicer {
  public:
   Slicer(Mesh& mesh, const Kernel::Plane_3& plane, const SliceOptions& o)
@@ -69,7 +67,7 @@ class Slicer {
   // endpoint (the nearer, never a protected one) snapped onto the plane.
   // Snapping only removes crossings, so one pass over the edges suffices.
   void apply_safeguard() {
-    const double sin_bound = std::sin((180.0 - o_.cap_angle) * kPi / 180.0);
+    const double sin_bound = sin_degrees(180.0 - o_.cap_angle);
     const Kernel::Vector_3 n = plane_.orthogonal_vector();
     for (auto e : mesh_.edges()) {
       const halfedge_descriptor h = mesh_.halfedge(e);
@@ -152,7 +150,7 @@ class Slicer {
   // classified exactly: a slice whose snapped vertices lie off the plane can
   // make a cap (or a zero-area piece) after all, and is then refused whole.
   bool plan_is_safe(const std::vector<face_descriptor>& faces) const {
-    const double cos_cap = std::cos(o_.cap_angle * kPi / 180.0);
+    const double cos_cap = cos_degrees(o_.cap_angle);
     std::vector<Point> poly;
     std::vector<char> on;
     for (face_descriptor f : faces) {

@@ -75,8 +75,8 @@ struct ShapeDecimator::Impl {
         pinned(vertex_pinned_map(m)),
         approx_point(m.add_property_map<vertex_descriptor, Point3d>(
                           "v:polyheal_approx", Point3d{std::nan(""), 0.0, 0.0}).first) {
-    cos_cap = std::cos(o.cap_angle * kPi / 180.0);
-    cos_needle = std::cos(o.needle_angle * kPi / 180.0);
+    cos_cap = cos_degrees(o.cap_angle);
+    cos_needle = cos_degrees(o.needle_angle);
     // Sampling can miss the farthest point by a little: decide at 70% of the
     // tolerance; the report states the Hausdorff distance actually measured.
     tol2 = 0.49 * o.tolerance * o.tolerance;
