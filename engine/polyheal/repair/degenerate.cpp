@@ -86,6 +86,12 @@ class Pipeline {
       if (classify_face(mesh_, f, cos_cap_, cos_needle_) == shape) out.push_back(f);
     return out;
   }
+  /// One flag per face, in mesh order (the order mesh_to_soup writes).
+  std::vector<char> bad_flags() const {
+    std::vector<char> out;
+    for (face_descriptor f : mesh_.faces()) out.push_back(decimator_.is_bad(f));
+    return out;
+  }
   std::vector<face_descriptor> bad_faces() const {
     std::vector<face_descriptor> out;
     for (face_descriptor f : mesh_.faces())
@@ -379,9 +385,7 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   // 5. round and certify
   t0 = std::chrono::steady_clock::now();
   if (o.observer) o.observer->stage("certifying");
-  const double cos_cap = cos_degrees(o.cap_angle), cos_needle = cos_degrees(o.needle_angle);
-  for (face_descriptor f : mesh.faces())  // mesh_to_soup keeps this face order
-    r.exact_bad.push_back(classify_face(mesh, f, cos_cap, cos_needle) != Shape::fine);
+  r.exact_bad = pipeline.bad_flags();
   result.soup = mesh_to_soup(mesh);
   if (o.certify) certify(input, result.soup, r);
   r.seconds_certify = seconds_since(t0);
