@@ -74,15 +74,22 @@ class Slicer {
       if (!crossing(h)) continue;
       const vertex_descriptor u = mesh_.source(h), v = mesh_.target(h);
       if (!angle_to_plane_less(mesh_.point(v) - mesh_.point(u), n, sin_bound)) continue;
-      const bool pu = protected_[static_cast<std::size_t>(u)], pv = protected_[static_cast<std::size_t>(v)];
-      if (pu && pv) continue;  // both ends protected: left to the caller's verification
-      vertex_descriptor w;
-      if (pu) w = v;
-      else if (pv) w = u;
-      else w = CGAL::squared_distance(mesh_.point(u), plane_) <= CGAL::squared_distance(mesh_.point(v), plane_) ? u : v;
-      side_[static_cast<std::size_t>(w)] = 0;
-      ++result_.vertices_snapped;
+      snap_one_end(u, v);
     }
+  }
+
+  /// Classifies one endpoint of edge uv as on the plane: the nearer one,
+  /// never a protected one. Both protected: nothing (the plan verifies).
+  void snap_one_end(vertex_descriptor u, vertex_descriptor v) {
+    const bool pu = protected_[static_cast<std::size_t>(u)], pv = protected_[static_cast<std::size_t>(v)];
+    if (pu && pv) return;
+    const vertex_descriptor w =
+        pu ? v
+        : pv ? u
+             : CGAL::compare(CGAL::squared_distance(mesh_.point(u), plane_),
+                             CGAL::squared_distance(mesh_.point(v), plane_)) != CGAL::LARGER ? u : v;
+    side_[static_cast<std::size_t>(w)] = 0;
+    ++result_.vertices_snapped;
   }
 
   // Global: every cut face. Local: the connected cut curve through the seed,
@@ -124,18 +131,7 @@ class Slicer {
       queue.pop_front();
       out.push_back(f);
       for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_)) {
-        if (crossing(h) && far(mesh_.source(h)) && far(mesh_.target(h))) {
-          const vertex_descriptor u = mesh_.source(h), v = mesh_.target(h);
-          const bool pu = protected_[static_cast<std::size_t>(u)], pv = protected_[static_cast<std::size_t>(v)];
-          if (!(pu && pv)) {
-            const vertex_descriptor w =
-                pu ? v : pv ? u
-                   : CGAL::compare(CGAL::squared_distance(mesh_.point(u), plane_),
-                                   CGAL::squared_distance(mesh_.point(v), plane_)) != CGAL::LARGER ? u : v;
-            side_[static_cast<std::size_t>(w)] = 0;
-            ++result_.vertices_snapped;
-          }
-        }
+        if (crossing(h) && far(mesh_.source(h)) && far(mesh_.target(h))) snap_one_end(mesh_.source(h), mesh_.target(h));
         if (crossing(h)) visit(mesh_.face(mesh_.opposite(h)));
         if (side(mesh_.target(h)) == 0 && !far(mesh_.target(h)))
           for (face_descriptor g : CGAL::faces_around_target(h, mesh_)) visit(g);
