@@ -122,16 +122,6 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
   return lower;
 }
 
-Soup soup_of(const std::vector<Corners>& triangles) {
-  Soup s;
-  for (const Corners& t : triangles) {
-    const Index base = static_cast<Index>(s.points.size());
-    s.points.insert(s.points.end(), t.begin(), t.end());
-    s.add_triangle(base, base + 1, base + 2);
-  }
-  return s;
-}
-
 /// Squared distance to a triangle; a zero-area one counts as its edges.
 double distance2(const K::Point_3& q, const K::Triangle_3& t) {
   if (t.is_degenerate())
@@ -152,13 +142,11 @@ struct SurfaceDistance::Impl {
   Tree tree;
 };
 
-SurfaceDistance::SurfaceDistance(const Soup& soup) : impl_(std::make_unique<Impl>()) {
-  for (std::size_t f = 0; f < soup.face_count(); ++f) {
-    const FaceView face = soup.face(f);
-    for (std::size_t k = 1; k + 1 < face.size(); ++k)
-      impl_->triangles.emplace_back(point(soup.points[face[0]]), point(soup.points[face[k]]),
-                                    point(soup.points[face[k + 1]]));
-  }
+SurfaceDistance::SurfaceDistance(const Soup& soup) : SurfaceDistance(triangles_of(soup)) {}
+
+SurfaceDistance::SurfaceDistance(const std::vector<std::array<Point3d, 3>>& triangles)
+    : impl_(std::make_unique<Impl>()) {
+  for (const auto& t : triangles) impl_->triangles.emplace_back(point(t[0]), point(t[1]), point(t[2]));
   impl_->tree.insert(impl_->triangles.cbegin(), impl_->triangles.cend());
   impl_->tree.accelerate_distance_queries();
 }
@@ -218,8 +206,8 @@ double hausdorff_distance(const Soup& a, const Soup& b, double error_bound) {
   std::set_difference(sa.begin(), sa.end(), sb.begin(), sb.end(), std::back_inserter(only_a));
   std::set_difference(sb.begin(), sb.end(), sa.begin(), sa.end(), std::back_inserter(only_b));
   if ((ta.empty() && !only_b.empty()) || (tb.empty() && !only_a.empty())) return -1.0;
-  const double ab = only_a.empty() ? 0.0 : one_sided(only_a, SurfaceDistance(soup_of(tb)), error_bound);
-  const double ba = only_b.empty() ? 0.0 : one_sided(only_b, SurfaceDistance(soup_of(ta)), error_bound);
+  const double ab = only_a.empty() ? 0.0 : one_sided(only_a, SurfaceDistance(tb), error_bound);
+  const double ba = only_b.empty() ? 0.0 : one_sided(only_b, SurfaceDistance(ta), error_bound);
   return std::max(ab, ba);
 }
 

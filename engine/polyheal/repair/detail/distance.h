@@ -6,6 +6,7 @@
 // on the coordinates as written (an AABB tree of the input triangles).
 #pragma once
 
+#include <array>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -19,6 +20,8 @@ class SurfaceDistance {
  public:
   /// Indexes every triangle of `soup` (polygons as fans). Keeps no reference.
   explicit SurfaceDistance(const Soup& soup);
+  /// Indexes the given triangles (corner positions).
+  explicit SurfaceDistance(const std::vector<std::array<Point3d, 3>>& triangles);
   ~SurfaceDistance();
   SurfaceDistance(const SurfaceDistance&) = delete;
   SurfaceDistance& operator=(const SurfaceDistance&) = delete;
