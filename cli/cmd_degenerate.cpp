@@ -11,42 +11,21 @@
 #include "polyheal/mesh/errors.h"
 #include "polyheal/repair/degenerate.h"
 #include "progress.h"
+#include "repair_command.h"
+#include "report_json.h"
 
 namespace polyheal::cli {
 namespace {
 
-struct DegenerateArgs {
-  std::string input, output;
-  bool json = false, list = false, overwrite = false, ascii = false, no_interleave = false;
+struct DegenerateArgs : RepairFiles {
+  bool no_interleave = false;
   std::string tolerance;  // "0.01" (model units) or "0.1%" (of the bbox diagonal)
   DegenerateOptions options;
 };
 
-/// "--tolerance 0.01" in model units, "--tolerance 0.1%" of the bbox diagonal.
-void parse_tolerance(const std::string& text, DegenerateOptions& o) {
-  if (text.empty()) return;
-  const bool relative = text.back() == '%';
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(relative ? text.substr(0, text.size() - 1) : text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() - (relative ? 1 : 0) || !(v > 0))
-    throw CLI::ValidationError("--tolerance", "expected a positive number, optionally followed by %: " + text);
-  if (relative) o.tolerance_ratio = v / 100.0;
-  else o.tolerance = v;
-}
-
 nlohmann::json counts_json(const ShapeCounts& c) {
   return {{"zero_area", c.zero_area}, {"caps", c.caps}, {"needles", c.needles}};
 }
-nlohmann::json topology_json(const SurfaceTopology& t) {
-  return {{"euler_characteristic", t.euler}, {"components", t.components}, {"boundary_loops", t.boundary_loops},
-          {"manifold", t.manifold}};
-}
-
 nlohmann::json to_json(const DegenerateArgs& a, const DegenerateReport& r, double read_s, double write_s) {
   auto leftovers = nlohmann::json::array();
   for (const Leftover& l : r.leftovers) leftovers.push_back({{"face", l.face}, {"shape", l.shape}, {"reason", l.reason}});
@@ -153,9 +132,7 @@ void add_degenerate(CLI::App& app, int& exit_code) {
       "topology as the input, no new self-intersection and a Hausdorff distance\n"
       "within the tolerance; 1 otherwise (the report lists each face left and why);\n"
       "2 on error (bad file, non-manifold input, refusing to overwrite).");
-  cmd->add_option("IN", args->input, "input mesh (.off, .obj, .stl, .ply): an oriented 2-manifold, open or closed")
-      ->required();
-  cmd->add_option("-o,--output", args->output, "output mesh; format from the extension")->required();
+  add_repair_files(cmd, *args, "polyheal.degenerate/1", "name every face left in the text report (default: the first 10)");
   cmd->add_option("--cap-angle", args->options.cap_angle, "a face with an angle above this is a cap (degrees)")
       ->default_val(175.0)->check(CLI::Range(90.0, 179.9));
   cmd->add_option("--needle-angle", args->options.needle_angle,
@@ -171,35 +148,18 @@ void add_degenerate(CLI::App& app, int& exit_code) {
                 "cut the whole mesh with each cap's plane, as the paper does (default: only the connected cut "
                 "through the cap)");
   cmd->add_flag("--no-interleave", args->no_interleave, "do not decimate along each slice right after it");
-  cmd->add_flag("--json", args->json, "print one JSON document (schema polyheal.degenerate/1, see README)");
-  cmd->add_flag("--list", args->list, "name every face left in the text report (default: the first 10)");
-  cmd->add_flag("--ascii", args->ascii, "STL/PLY output in ASCII");
-  cmd->add_flag("--overwrite", args->overwrite, "replace an existing output file (never the input)");
   cmd->callback([args, &exit_code] {
-    const auto t0 = std::chrono::steady_clock::now();
-    parse_tolerance(args->tolerance, args->options);
+    parse_length("--tolerance", args->tolerance, args->options.tolerance, args->options.tolerance_ratio);
     args->options.interleave = !args->no_interleave;
-    refuse_to_clobber(args->input, args->output, false);
     TtyProgress progress;
-    progress.stage("reading");
-    const Soup soup = read_soup(args->input);
-    const double read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    double read_s = 0;
+    const Soup soup = read_repair_input(*args, progress, read_s);
     args->options.observer = &progress;
     args->options.certify = false;  // certified below, on the file as written
-    DegenerateResult result;
-    try {
-      result = remove_degenerate_faces(soup, args->options);
-    } catch (const UnsupportedInput& e) {
-      throw std::runtime_error(args->input + ": " + e.what());
-    }
-    // Certify what was written, not what was meant to be written.
+    DegenerateResult result = run_repair(*args, [&] { return remove_degenerate_faces(soup, args->options); });
     const auto t1 = std::chrono::steady_clock::now();
     progress.stage("writing and verifying");
-    WriteOptions wo;
-    wo.ascii = args->ascii;
-    wo.allow_overwrite = args->overwrite;
-    write_soup(result.soup, args->output, wo);
-    const Soup written = read_soup(args->output);
+    const Soup written = write_and_read_back(result.soup, *args);
     certify(soup, written, result.report);
     result.report.seconds_certify = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
     const double write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();

@@ -13,4 +13,7 @@ void add_check(CLI::App& app, int& exit_code);
 /// Adds `degenerate` (Botsch & Kobbelt degenerate-face removal).
 void add_degenerate(CLI::App& app, int& exit_code);
 
+/// Adds `deintersect` (Yamakawa & Shimada self-intersection removal).
+void add_deintersect(CLI::App& app, int& exit_code);
+
 }  // namespace polyheal::cli

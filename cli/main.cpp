@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   int exit_code = kError;
   add_check(app, exit_code);
   add_degenerate(app, exit_code);
+  add_deintersect(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

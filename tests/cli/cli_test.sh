@@ -51,5 +51,26 @@ grep_out "nonmanifold.off: not an oriented 2-manifold mesh" "$tmp/err" "non-mani
 expect 2 "degenerate bad tolerance" -- "$bin" degenerate "$tmp/tjunction.off" -o "$tmp/x.off" --tolerance abc
 expect 2 "degenerate malformed input" -- "$bin" degenerate "$tmp/bad.off" -o "$tmp/x.off"
 [ ! -e "$tmp/x.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: output written on error"; }
+# polyheal deintersect
+expect 0 "deintersect frees the coarse tube" -- "$bin" deintersect "$src/fixtures/tube_edge3.0.off" -o "$tmp/tube_out.off"
+grep_out "intersecting faces: 220 -> 0" "$tmp/out" "deintersect reports faces before and after"
+expect 0 "deintersect output checks clean" -- "$bin" check "$tmp/tube_out.off"
+expect 0 "deintersect --json" -- "$bin" deintersect --json --clearance 0.01 "$src/fixtures/tube_edge3.0.off" -o "$tmp/tube_out2.stl"
+grep_out '"schema": "polyheal.deintersect/1"' "$tmp/out" "deintersect json schema tag"
+grep_out '"clearance_mode": "absolute"' "$tmp/out" "deintersect json names the clearance mode"
+expect 1 "deintersect leaves deeply crossing spheres, exit 1" -- "$bin" deintersect "$src/fixtures/spheres_intersecting.off" -o "$tmp/sph.off"
+grep_out "still intersecting (output face ids)" "$tmp/out" "deintersect lists the faces left"
+expect 0 "deintersect re-check agrees: spheres output still intersects" -- test -s "$tmp/sph.off"
+expect 1 "deintersect output of the spheres does not check clean" -- "$bin" check "$tmp/sph.off"
+expect 2 "deintersect refuses a non-manifold soup" -- "$bin" deintersect "$tmp/nonmanifold.off" -o "$tmp/nm_out.off"
+grep_out "deintersect needs a manifold mesh" "$tmp/err" "deintersect non-manifold refusal says why"
+expect 2 "deintersect bad clearance" -- "$bin" deintersect "$src/fixtures/tube_edge3.0.off" -o "$tmp/y.off" --clearance abc
+expect 2 "deintersect clearance and tet-aspect together" -- "$bin" deintersect "$src/fixtures/tube_edge3.0.off" -o "$tmp/y.off" --clearance 0.1 --tet-aspect 10
+expect 2 "deintersect bad --ops" -- "$bin" deintersect "$src/fixtures/tube_edge3.0.off" -o "$tmp/y.off" --ops swap,drill
+expect 2 "deintersect malformed input" -- "$bin" deintersect "$tmp/bad.off" -o "$tmp/y.off"
+[ ! -e "$tmp/y.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: deintersect wrote output on error"; }
+expect 2 "deintersect never writes over its input" -- "$bin" deintersect "$tmp/tube_out.off" -o "$tmp/tube_out.off" --overwrite
+expect 0 "deintersect help" -- "$bin" deintersect --help
+grep_out "Exit 0 when the written file has no self-intersection" "$tmp/out" "deintersect help explains exit codes"
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]

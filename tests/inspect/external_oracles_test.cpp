@@ -14,20 +14,7 @@
 
 using namespace polyheal;
 
-namespace {
-
-std::string run(const std::string& command) {
-  std::string out;
-  if (FILE* p = ::popen((command + " 2>&1").c_str(), "r")) {
-    char buf[4096];
-    std::size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
-    ::pclose(p);
-  }
-  return out;
-}
-
-}  // namespace
+using test::run;
 
 TEST_CASE("external: tetgen -d agrees with our self-intersection verdict", "[inspect][tetgen]") {
   REQUIRE(run("command -v tetgen").find("tetgen") != std::string::npos);  // scripts/setup.sh installs it

@@ -1,5 +1,6 @@
 #include "support/builders.h"
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -43,6 +44,23 @@ std::string scratch(const std::string& name) {
 void write_bytes(const std::string& path, const std::string& bytes) {
   std::ofstream out(path, std::ios::binary);
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+std::string run(const std::string& command) {
+  std::string out;
+  if (FILE* p = ::popen((command + " 2>&1").c_str(), "r")) {
+    char buf[4096];
+    std::size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+    ::pclose(p);
+  }
+  return out;
+}
+
+bool tetgen_meshes(const std::string& path, const std::string& name) {
+  const std::string copy = scratch(name);
+  std::filesystem::copy_file(path, copy, std::filesystem::copy_options::overwrite_existing);
+  return run("tetgen -pYQ '" + copy + "' >/dev/null 2>&1; echo \"exit=$?\"").find("exit=0") != std::string::npos;
 }
 
 }  // namespace polyheal::test

@@ -20,6 +20,12 @@ Soup concat(const Soup& a, const Soup& b);
 std::string fixture(const std::string& name);   // path under fixtures/
 std::string scratch(const std::string& name);   // a fresh path in the build tree
 void write_bytes(const std::string& path, const std::string& bytes);
+/// Runs a shell command; its stdout and stderr together.
+std::string run(const std::string& command);
+/// Does `tetgen -pYQ` tetrahedralise `path` (a surface mesh file)? TetGen
+/// writes beside its input, so it works on a copy, scratch(`name`): a name
+/// no concurrently running test uses.
+bool tetgen_meshes(const std::string& path, const std::string& name);
 
 }  // namespace polyheal::test
 

@@ -165,4 +165,17 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
 
 }  // namespace
 
+SurfaceTopology topology_of(const Report& r) {
+  SurfaceTopology t;
+  const long used = long(r.vertices) - long(r.isolated_vertices) - long(r.merged_identical_vertices);
+  // Triangles only here (polygons are refused): each interior edge has two
+  // face sides, each boundary edge one.
+  const long edges = (3 * long(r.faces) + long(r.boundary_edges.size())) / 2;
+  t.euler = used - edges + long(r.faces);
+  t.components = r.components;
+  t.boundary_loops = r.boundary_loops;
+  t.manifold = r.manifold && r.oriented;
+  return t;
+}
+
 }  // namespace polyheal

@@ -72,4 +72,19 @@ struct Report {
 
 Report inspect(const Soup& soup, const InspectOptions& options = {});
 
+/// Topological invariants compared between input and output.
+struct SurfaceTopology {
+  long euler = 0;                // V - E + F
+  std::size_t components = 0, boundary_loops = 0;
+  bool manifold = false;
+  bool operator==(const SurfaceTopology& o) const {
+    return euler == o.euler && components == o.components && boundary_loops == o.boundary_loops &&
+           manifold == o.manifold;
+  }
+};
+
+/// The invariants of an inspected triangle soup (Euler characteristic from
+/// the welded vertices, faces and edges).
+SurfaceTopology topology_of(const Report& report);
+
 }  // namespace polyheal

@@ -29,19 +29,6 @@ Point rounded(const Point& p) {
 
 ShapeCounts shape_counts(const Report& r) { return {r.degenerate_faces.size(), r.caps.size(), r.needles.size()}; }
 
-SurfaceTopology topology_of(const Report& r) {
-  SurfaceTopology t;
-  const long used = long(r.vertices) - long(r.isolated_vertices) - long(r.merged_identical_vertices);
-  // Triangles only here (polygons are refused): each interior edge has two
-  // face sides, each boundary edge one.
-  const long edges = (3 * long(r.faces) + long(r.boundary_edges.size())) / 2;
-  t.euler = used - edges + long(r.faces);
-  t.components = r.components;
-  t.boundary_loops = r.boundary_loops;
-  t.manifold = r.manifold && r.oriented;
-  return t;
-}
-
 InspectOptions inspect_options(const DegenerateOptions& o) {
   InspectOptions io;
   io.cap_angle = o.cap_angle;

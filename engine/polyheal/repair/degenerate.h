@@ -68,17 +68,6 @@ struct Leftover {
   std::string reason;
 };
 
-/// Topological invariants compared between input and output.
-struct SurfaceTopology {
-  long euler = 0;                // V - E + F
-  std::size_t components = 0, boundary_loops = 0;
-  bool manifold = false;
-  bool operator==(const SurfaceTopology& o) const {
-    return euler == o.euler && components == o.components && boundary_loops == o.boundary_loops &&
-           manifold == o.manifold;
-  }
-};
-
 struct DegenerateReport {
   // parameters as used
   double cap_angle = 0, needle_angle = 0, tolerance = 0, bbox_diagonal = 0;

@@ -169,6 +169,22 @@ std::vector<std::size_t> SurfaceDistance::triangles_near(const Point3d& lo, cons
   return out;
 }
 
+double SurfaceDistance::ray_distance(const Point3d& origin, const Point3d& direction,
+                                     const std::vector<std::size_t>& skip) const {
+  if (impl_->triangles.empty()) return -1.0;
+  const K::Ray_3 ray(point(origin), K::Vector_3(direction[0], direction[1], direction[2]));
+  const auto first = impl_->triangles.cbegin();
+  const auto hit = impl_->tree.first_intersection(ray, [&](Triangles::const_iterator t) {
+    return std::binary_search(skip.begin(), skip.end(), static_cast<std::size_t>(t - first));
+  });
+  if (!hit) return -1.0;
+  K::Point_3 at;
+  if (const auto* p = boost::get<K::Point_3>(&hit->first)) at = *p;
+  else if (const auto* s = boost::get<K::Segment_3>(&hit->first)) at = s->source();
+  else return -1.0;
+  return std::sqrt(CGAL::to_double(CGAL::squared_distance(ray.source(), at)));
+}
+
 bool SurfaceDistance::empty() const { return impl_->triangles.empty(); }
 
 std::pair<double, std::size_t> SurfaceDistance::nearest(const Point3d& p) const {

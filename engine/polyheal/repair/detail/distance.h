@@ -40,6 +40,10 @@ class SurfaceDistance {
   /// Indices of the surface triangles whose bounding boxes meet the box
   /// [lo, hi] (candidates for squared_distance_to).
   std::vector<std::size_t> triangles_near(const Point3d& lo, const Point3d& hi) const;
+  /// Distance along the ray from `origin` in direction `direction` to the
+  /// first triangle it hits, ignoring the triangles in `skip` (sorted); -1
+  /// when it hits none (the local thickness of Yamakawa & Shimada §5.2).
+  double ray_distance(const Point3d& origin, const Point3d& direction, const std::vector<std::size_t>& skip) const;
   bool empty() const;
 
  private:

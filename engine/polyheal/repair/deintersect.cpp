@@ -1,0 +1,712 @@
+#include "polyheal/repair/deintersect.h"
+
+#include <CGAL/boost/graph/Euler_operations.h>
+#include <CGAL/boost/graph/helpers.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <optional>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "polyheal/inspect/local_index.h"
+#include "polyheal/inspect/self_intersections.h"
+#include "polyheal/mesh/convert.h"
+#include "polyheal/mesh/errors.h"
+#include "polyheal/mesh/mesh.h"
+#include "polyheal/repair/detail/distance.h"
+
+namespace polyheal {
+namespace {
+
+using Vector = Kernel::Vector_3;
+using Segment = Kernel::Segment_3;
+using Triangle = Kernel::Triangle_3;
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// The nearest double point to an exact construction: the position a vertex
+/// is proposed to move to (see the rounding policy in deintersect.h).
+Point rounded(const Point& p) {
+  const Point3d d = approx_point3d(p);
+  return Point(d[0], d[1], d[2]);
+}
+
+Point3d sub(const Point3d& a, const Point3d& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double dot(const Point3d& a, const Point3d& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Point3d cross(const Point3d& a, const Point3d& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+double length(const Point3d& a) { return std::sqrt(dot(a, a)); }
+/// |volume| of tetrahedron abcd (a cost, not a predicate).
+double tet_volume(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& d) {
+  return std::abs(dot(sub(b, a), cross(sub(c, a), sub(d, a)))) / 6.0;
+}
+
+enum class OpKind { swap, hammer, lift };
+
+/// One operation, in terms that survive other operations: a swap names its
+/// edge by its end vertices, a move names vertices and their new positions.
+struct Op {
+  OpKind kind = OpKind::swap;
+  vertex_descriptor a, b;                                    // swap: the edge ab
+  std::vector<std::pair<vertex_descriptor, Point>> moves;    // hammer: one, lift: three
+  double cost = 0;                                           // swept volume (§4.5, Fig. 9)
+  double shift = 0;                                          // the largest vertex move
+};
+
+/// The repair of stage 2 on one working mesh.
+class Deintersector {
+ public:
+  /// `original`: every vertex's input position; no move takes a vertex
+  /// further than r.max_displacement_allowed from it.
+  Deintersector(Mesh& mesh, Mesh::Property_map<vertex_descriptor, Point3d> original, const DeintersectOptions& o,
+                DeintersectReport& r)
+      : mesh_(mesh), original_(original), o_(o), r_(r), index_(mesh), partners_(mesh.number_of_faces()) {
+    std::vector<face_descriptor> all(mesh.faces().begin(), mesh.faces().end());
+    for (const auto& [f, g] : index_.intersections(all)) link(f, g);
+  }
+
+  std::size_t intersecting_faces() const { return intersecting_; }
+  std::size_t intersecting_pairs() const {
+    std::size_t n = 0;
+    for (const auto& p : partners_) n += p.size();
+    return n / 2;
+  }
+
+  /// Rounds of cost phase + implementation phase (§4.5) until nothing applies.
+  void run() {
+    while (intersecting_ > 0 && r_.rounds < o_.max_rounds) {
+      ++r_.rounds;
+      if (o_.observer) o_.observer->progress(1.0 - double(intersecting_) / double(std::max<std::size_t>(1, start_)));
+      std::vector<Op> ops = cost_phase();
+      if (ops.empty()) break;
+      std::stable_sort(ops.begin(), ops.end(), [](const Op& x, const Op& y) { return x.cost < y.cost; });
+      std::size_t applied = 0;
+      for (const Op& op : ops) {
+        if (intersecting_ == 0) break;
+        if (try_op(op, /*keep=*/true)) {
+          ++applied;
+          ++(op.kind == OpKind::swap ? r_.swaps : op.kind == OpKind::hammer ? r_.hammers : r_.lifts);
+        } else {
+          ++r_.stale;
+        }
+      }
+      if (applied == 0) break;
+    }
+  }
+
+ private:
+  Mesh& mesh_;
+  Mesh::Property_map<vertex_descriptor, Point3d> original_;
+  const DeintersectOptions& o_;
+  DeintersectReport& r_;
+  LocalIndex index_;
+  std::vector<std::vector<face_descriptor>> partners_;  // by face index: the faces it intersects
+  std::size_t intersecting_ = 0;                        // faces with a partner
+  std::size_t start_ = 0;
+  std::unique_ptr<detail::SurfaceDistance> rays_;       // local-thickness mode: this round's surface
+
+  static std::size_t id(face_descriptor f) { return static_cast<std::size_t>(f); }
+
+  void link(face_descriptor f, face_descriptor g) {
+    for (face_descriptor x : {f, g})
+      if (partners_[id(x)].empty()) ++intersecting_;
+    partners_[id(f)].push_back(g);
+    partners_[id(g)].push_back(f);
+    start_ = std::max(start_, intersecting_);
+  }
+
+  /// Replaces every pair involving `changed` by the pairs `now`.
+  void relink(const std::vector<face_descriptor>& changed,
+              const std::vector<std::pair<face_descriptor, face_descriptor>>& now) {
+    std::vector<face_descriptor> affected = changed;
+    for (face_descriptor f : changed) affected.insert(affected.end(), partners_[id(f)].begin(), partners_[id(f)].end());
+    for (const auto& [f, g] : now) affected.insert(affected.end(), {f, g});
+    std::sort(affected.begin(), affected.end());
+    affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
+    for (face_descriptor x : affected) intersecting_ -= partners_[id(x)].empty() ? 0 : 1;
+    for (face_descriptor f : changed) {
+      for (face_descriptor g : partners_[id(f)]) {
+        auto& pg = partners_[id(g)];
+        pg.erase(std::remove(pg.begin(), pg.end(), f), pg.end());
+      }
+      partners_[id(f)].clear();
+    }
+    for (const auto& [f, g] : now) {
+      partners_[id(f)].push_back(g);
+      partners_[id(g)].push_back(f);
+    }
+    for (face_descriptor x : affected) intersecting_ += partners_[id(x)].empty() ? 0 : 1;
+  }
+
+  // ---- geometry helpers -------------------------------------------------
+
+  std::array<vertex_descriptor, 3> corners(face_descriptor f) const {
+    const halfedge_descriptor h = mesh_.halfedge(f);
+    return {mesh_.source(h), mesh_.target(h), mesh_.target(mesh_.next(h))};
+  }
+  Vector normal(face_descriptor f) const {
+    const auto c = corners(f);
+    return CGAL::cross_product(mesh_.point(c[1]) - mesh_.point(c[0]), mesh_.point(c[2]) - mesh_.point(c[0]));
+  }
+  Point3d p3(vertex_descriptor v) const { return approx_point3d(mesh_.point(v)); }
+
+  /// The faces around the vertices `vs` (each once).
+  std::vector<face_descriptor> star(const std::vector<vertex_descriptor>& vs) const {
+    std::vector<face_descriptor> out;
+    for (vertex_descriptor v : vs)
+      for (face_descriptor f : CGAL::faces_around_target(mesh_.halfedge(v), mesh_))
+        if (f != Mesh::null_face() && std::find(out.begin(), out.end(), f) == out.end()) out.push_back(f);
+    return out;
+  }
+
+  /// Exact shape checks on `changed` after an edit: no face becomes
+  /// degenerate (exactly collinear), and no edge in `unfolded` (see
+  /// unfolded_edges) folds. A face's own normal must not turn around either
+  /// (compared with `before`; for a swap each new face with both replaced
+  /// faces) — unless the face was folded against a neighbour before the
+  /// edit (`folded`): turning an inverted sliver back is a repair.
+  bool shapes_ok(const std::vector<face_descriptor>& changed, const std::vector<Vector>& before, bool swap,
+                 const std::vector<halfedge_descriptor>& unfolded, const std::vector<char>& folded) const {
+    for (std::size_t i = 0; i < changed.size(); ++i) {
+      const Vector n = normal(changed[i]);
+      if (n == CGAL::NULL_VECTOR) return false;
+      if (swap) {
+        for (const Vector& m : before)
+          if (!CGAL::is_positive(n * m)) return false;
+      } else if (!folded[i] && !CGAL::is_positive(n * before[i])) {
+        return false;
+      }
+    }
+    for (halfedge_descriptor h : unfolded)
+      if (!CGAL::is_positive(normal(mesh_.face(h)) * normal(mesh_.face(mesh_.opposite(h))))) return false;
+    return true;
+  }
+
+  /// Per face of `faces`: is it folded against a neighbour now (normals
+  /// with a non-positive dot product across an edge)?
+  std::vector<char> folded_faces(const std::vector<face_descriptor>& faces) const {
+    std::vector<char> out;
+    for (face_descriptor f : faces) {
+      const Vector n = normal(f);
+      char folded = 0;
+      for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_)) {
+        const face_descriptor g = mesh_.face(mesh_.opposite(h));
+        if (g != Mesh::null_face() && !CGAL::is_positive(n * normal(g))) folded = 1;
+      }
+      out.push_back(folded);
+    }
+    return out;
+  }
+
+  /// Halfedges `hs` (inner sides of edges an edit may bend) whose two faces
+  /// are not folded now: normals with a positive dot product. After the
+  /// edit they must still not be (a fold is a spike the oracle does not
+  /// count as an intersection).
+  std::vector<halfedge_descriptor> unfolded_edges(const std::vector<halfedge_descriptor>& hs) const {
+    std::vector<halfedge_descriptor> out;
+    for (halfedge_descriptor h : hs) {
+      const face_descriptor g = mesh_.face(mesh_.opposite(h));
+      if (g != Mesh::null_face() && CGAL::is_positive(normal(mesh_.face(h)) * normal(g))) out.push_back(h);
+    }
+    return out;
+  }
+
+  std::vector<halfedge_descriptor> halfedges_of(const std::vector<face_descriptor>& faces) const {
+    std::vector<halfedge_descriptor> out;
+    for (face_descriptor f : faces)
+      for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_)) out.push_back(h);
+    return out;
+  }
+
+  // ---- the improvement criteria (§4.1) ------------------------------------
+
+  /// With `changed` edited in place and re-indexed: do the pairs `now`
+  /// satisfy §4.1? Returns how many fewer faces intersect (0: refused). The number of intersecting faces strictly decreases and
+  /// no intersection-free face becomes intersecting. For a swap the two
+  /// faces are new triangles, so only their number is compared: no more of
+  /// them intersect than of the two they replace.
+  long gain(const std::vector<face_descriptor>& changed,
+                const std::vector<std::pair<face_descriptor, face_descriptor>>& now, bool swap) const {
+    auto in_changed = [&](face_descriptor f) { return std::find(changed.begin(), changed.end(), f) != changed.end(); };
+    std::unordered_map<std::size_t, long> after;  // partners after the edit, per affected face
+    for (face_descriptor f : changed) {
+      after.emplace(id(f), 0);
+      for (face_descriptor g : partners_[id(f)])
+        if (!in_changed(g) && !after.count(id(g))) {
+          long keep = 0;
+          for (face_descriptor x : partners_[id(g)]) keep += in_changed(x) ? 0 : 1;
+          after.emplace(id(g), keep);
+        }
+    }
+    for (const auto& [f, g] : now)
+      for (face_descriptor x : {f, g}) {
+        auto it = after.find(id(x));
+        if (it == after.end()) {
+          if (partners_[id(x)].empty()) return 0;  // a free face would start intersecting
+          it = after.emplace(id(x), long(partners_[id(x)].size())).first;  // not adjacent to `changed` before
+        }
+        ++it->second;
+      }
+    long before_count = 0, after_count = 0, before_changed = 0, after_changed = 0;
+    for (const auto& [f, n] : after) {
+      const bool was = !partners_[f].empty(), is = n > 0;
+      before_count += was;
+      after_count += is;
+      if (in_changed(face_descriptor(static_cast<Mesh::size_type>(f)))) {
+        before_changed += was;
+        after_changed += is;
+        if (!swap && !was && is) return 0;
+      } else if (!was && is) {
+        return 0;
+      }
+    }
+    if (swap && after_changed > before_changed) return 0;
+    return std::max(0L, before_count - after_count);
+  }
+
+  // ---- applying and retracting ----------------------------------------------
+
+  /// Applies `op` if it is valid now: shapes, then the criteria. With keep,
+  /// a valid op stays and the pair bookkeeping follows; otherwise (or when
+  /// invalid) the mesh is restored exactly. Returns the gain (0: invalid).
+  long try_op(const Op& op, bool keep) {
+    ++r_.trials;
+    if (op.kind == OpKind::swap) return try_swap(op, keep);
+    return try_moves(op, keep);
+  }
+
+  /// The end of every trial, with the edit made: if its shapes are valid,
+  /// re-index `changed`, ask the oracle what they intersect now and decide
+  /// §4.1; with keep, a valid edit's pairs replace the old ones. Returns the
+  /// gain; the caller undoes the edit unless it is kept.
+  long decide(const std::vector<face_descriptor>& changed, bool shapes_valid, bool swap, bool keep) {
+    if (!shapes_valid) return 0;
+    index_.update(changed);
+    const auto now = index_.intersections(changed);
+    const long g = gain(changed, now, swap);
+    if (g > 0 && keep) relink(changed, now);
+    return g;
+  }
+
+  long try_moves(const Op& op, bool keep) {
+    std::vector<vertex_descriptor> vs;
+    for (const auto& m : op.moves) vs.push_back(m.first);
+    const std::vector<face_descriptor> changed = star(vs);
+    std::vector<Vector> before;
+    for (face_descriptor f : changed) before.push_back(normal(f));
+    const auto unfolded = unfolded_edges(halfedges_of(changed));
+    const auto folded = folded_faces(changed);
+    std::vector<Point> old;
+    for (const auto& [v, p] : op.moves) {
+      old.push_back(mesh_.point(v));
+      mesh_.point(v) = p;
+    }
+    const long ok = decide(changed, shapes_ok(changed, before, false, unfolded, folded), false, keep);
+    if (ok && keep) return ok;
+    for (std::size_t i = 0; i < op.moves.size(); ++i) mesh_.point(op.moves[i].first) = old[i];
+    index_.update(changed);
+    return ok;
+  }
+
+  long try_swap(const Op& op, bool keep) {
+    const auto [h, found] = CGAL::halfedge(op.a, op.b, mesh_);
+    if (!found || mesh_.is_border(mesh_.edge(h))) return 0;
+    const halfedge_descriptor o = mesh_.opposite(h);
+    const vertex_descriptor c = mesh_.target(mesh_.next(h)), d = mesh_.target(mesh_.next(o));
+    // A swap must not duplicate an edge or leave a vertex with two edges.
+    if (c == d || CGAL::halfedge(c, d, mesh_).second) return 0;
+    for (vertex_descriptor v : {op.a, op.b})  // an interior vertex keeps 3 edges, a border one 2
+      if (CGAL::degree(v, mesh_) <= (mesh_.is_border(v, true) ? 2u : 3u)) return 0;
+    const std::vector<face_descriptor> changed{mesh_.face(h), mesh_.face(o)};
+    const std::vector<Vector> before{normal(changed[0]), normal(changed[1])};
+    // The quad's four outer edges keep their halfedges through the flip.
+    const auto unfolded = unfolded_edges({mesh_.next(h), mesh_.prev(h), mesh_.next(o), mesh_.prev(o)});
+    CGAL::Euler::flip_edge(h, mesh_);
+    const long ok = decide(changed, shapes_ok(changed, before, true, unfolded, {}), true, keep);
+    if (ok && keep) {
+      if (const auto origin = face_origin_map(mesh_)) (*origin)[changed[0]] = (*origin)[changed[1]] = -1;  // new triangles
+      return ok;
+    }
+    // Each flip turns h one step around the quad (ab, cd, ba, dc): three more
+    // bring back ab with every face holding its own triangle again (two
+    // would swap the faces' triangles).
+    for (int k = 0; k < 3; ++k) CGAL::Euler::flip_edge(h, mesh_);
+    index_.update(changed);
+    return ok;
+  }
+
+  // ---- candidates ---------------------------------------------------------
+
+  /// The faces intersecting any face around v.
+  std::vector<face_descriptor> partners_around(const std::vector<face_descriptor>& faces) const {
+    std::vector<face_descriptor> out;
+    for (face_descriptor f : faces)
+      for (face_descriptor g : partners_[id(f)])
+        if (std::find(out.begin(), out.end(), g) == out.end()) out.push_back(g);
+    return out;
+  }
+
+  bool has_vertex(face_descriptor f, vertex_descriptor v) const {
+    const auto c = corners(f);
+    return c[0] == v || c[1] == v || c[2] == v;
+  }
+
+  Triangle triangle(face_descriptor f) const {
+    const auto c = corners(f);
+    return {mesh_.point(c[0]), mesh_.point(c[1]), mesh_.point(c[2])};
+  }
+
+  /// Exact points where segment (from v to b) crosses the faces `others`
+  /// that share no vertex with it; a coplanar overlap gives both ends.
+  std::vector<Point> crossings(vertex_descriptor v, vertex_descriptor b,
+                               const std::vector<face_descriptor>& others) const {
+    const Segment s(mesh_.point(v), mesh_.point(b));
+    std::vector<Point> xs;
+    for (face_descriptor g : others) {
+      if (has_vertex(g, v) || has_vertex(g, b)) continue;
+      const Triangle t = triangle(g);
+      if (t.is_degenerate() || !CGAL::do_intersect(s, t)) continue;
+      const auto x = CGAL::intersection(s, t);
+      if (!x) continue;
+      if (const Point* p = boost::get<Point>(&*x)) xs.push_back(*p);
+      else if (const Segment* q = boost::get<Segment>(&*x)) {
+        xs.push_back(q->source());
+        xs.push_back(q->target());
+      }
+    }
+    return xs;
+  }
+
+  /// Edge hammering (§4.3, Fig. 6). For each edge ab_n at `a` that crosses
+  /// other faces: the paper's candidate, (x+b_n)/2 for one crossing x and
+  /// (x1+x2)/2 for the two nearest to a; and the near candidate, the point
+  /// the clearance ε beyond the first crossing, towards b_n (or x2) — the
+  /// paper allows anywhere between x and b_n, and §5.2 suggests a clearance
+  /// for hammering too. Ops: a to the average of the paper's candidates (the
+  /// paper's move), to the average of the near ones, and to each candidate
+  /// alone (an average can mix directions that cancel out). The cost phase
+  /// keeps the cheapest valid one.
+  std::vector<Op> hammer_ops(vertex_descriptor a) const {
+    const std::vector<face_descriptor> around = star({a});
+    const std::vector<face_descriptor> others = partners_around(around);
+    const Point& pa = mesh_.point(a);
+    std::vector<Point> paper, near;
+    for (halfedge_descriptor h : CGAL::halfedges_around_target(mesh_.halfedge(a), mesh_)) {
+      const vertex_descriptor b = mesh_.source(h);
+      std::vector<Point> xs = crossings(a, b, others);
+      if (xs.empty()) continue;
+      std::sort(xs.begin(), xs.end(), [&](const Point& x, const Point& y) { return CGAL::has_smaller_distance_to_point(pa, x, y); });
+      xs.erase(std::unique(xs.begin(), xs.end()), xs.end());
+      const Point& stop = xs.size() == 1 ? mesh_.point(b) : xs[1];  // the move must not pass it
+      paper.push_back(CGAL::midpoint(xs[0], stop));
+      const Point3d x = approx_point3d(xs[0]), towards = sub(approx_point3d(stop), x);
+      const double room = length(towards), eps = edge_clearance(length(sub(p3(b), p3(a))));
+      if (room > 0 && eps < 0.5 * room) {
+        const double t = eps / room;
+        near.push_back(Point(x[0] + t * towards[0], x[1] + t * towards[1], x[2] + t * towards[2]));
+      }
+    }
+    std::vector<Op> ops;
+    auto move_to = [&](const Point& p) {
+      Op op;
+      op.kind = OpKind::hammer;
+      op.moves = {{a, rounded(p)}};
+      if (op.moves[0].second != pa) ops.push_back(op);
+    };
+    auto average = [](const std::vector<Point>& ps) {
+      Vector sum = CGAL::NULL_VECTOR;
+      for (const Point& p : ps) sum = sum + (p - CGAL::ORIGIN);
+      return CGAL::ORIGIN + sum / static_cast<int>(ps.size());
+    };
+    for (const std::vector<Point>* set : {&paper, &near}) {
+      if (set->empty()) continue;
+      move_to(average(*set));
+      if (set->size() > 1)
+        for (const Point& p : *set) move_to(p);
+    }
+    return ops;
+  }
+
+  /// The hammering clearance for an edge of length `edge` (§5.2 adapted):
+  /// the lifting clearance's rule with the edge in place of the face.
+  double edge_clearance(double edge) const {
+    switch (o_.clearance_mode) {
+      case ClearanceMode::absolute: return o_.clearance;
+      case ClearanceMode::tet_aspect: return edge / o_.clearance;
+      case ClearanceMode::edge_relative: return o_.clearance * edge;
+      case ClearanceMode::local_thickness: break;
+    }
+    return DeintersectOptions{}.clearance * edge;  // no ray for a point on an edge: the default ratio
+  }
+
+  /// The face-lifting clearance ε for face f (§4.4, §5.2); negative: do not lift.
+  double clearance(face_descriptor f, const Point3d& n) const {
+    const auto c = corners(f);
+    double longest = 0;
+    for (int k = 0; k < 3; ++k) longest = std::max(longest, length(sub(p3(c[k]), p3(c[(k + 1) % 3]))));
+    switch (o_.clearance_mode) {
+      case ClearanceMode::absolute: return o_.clearance;
+      case ClearanceMode::tet_aspect: return longest / o_.clearance;
+      case ClearanceMode::edge_relative: return o_.clearance * longest;
+      case ClearanceMode::local_thickness: break;
+    }
+    // §5.2: a ray from each corner along -n to the next face; the median of
+    // the non-zero distances, the one if only one, no lift if none.
+    std::vector<double> t;
+    for (vertex_descriptor v : c) {
+      std::vector<std::size_t> skip;
+      for (face_descriptor g : star({v})) skip.push_back(id(g));
+      std::sort(skip.begin(), skip.end());
+      const double d = rays_->ray_distance(p3(v), {-n[0], -n[1], -n[2]}, skip);
+      if (d > 0) t.push_back(d);
+    }
+    if (t.empty()) return -1.0;
+    std::sort(t.begin(), t.end());
+    return t.size() == 3 ? t[1] : t.size() == 2 ? 0.5 * (t[0] + t[1]) : t[0];
+  }
+
+  /// Face lifting (§4.4, Fig. 8): the nodes p_i of the edges crossing f give
+  /// signed heights d_i = (p_i - t_1).n; f moves by n(d_max + ε) or by
+  /// n(d_min - ε). Both are returned; the cost phase keeps the valid one,
+  /// the smaller when both are.
+  std::vector<Op> lift_ops(face_descriptor f) const {
+    std::vector<Op> ops;
+    const auto c = corners(f);
+    const Triangle t = triangle(f);
+    std::vector<vertex_descriptor> nodes;
+    for (face_descriptor g : partners_[id(f)])
+      for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(g), mesh_)) {
+        const vertex_descriptor p = mesh_.source(h), q = mesh_.target(h);
+        if (has_vertex(f, p) || has_vertex(f, q)) continue;
+        if (!CGAL::do_intersect(Segment(mesh_.point(p), mesh_.point(q)), t)) continue;
+        for (vertex_descriptor x : {p, q})
+          if (std::find(nodes.begin(), nodes.end(), x) == nodes.end()) nodes.push_back(x);
+      }
+    if (nodes.empty()) return ops;
+    Point3d n = approx_point3d(CGAL::ORIGIN + normal(f));
+    const double len = length(n);
+    if (!(len > 0)) return ops;
+    for (double& x : n) x /= len;
+    const double eps = clearance(f, n);
+    if (eps < 0) return ops;
+    double dmin = 0, dmax = 0;
+    const Point3d t1 = p3(c[0]);
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      const double d = dot(sub(p3(nodes[i]), t1), n);
+      dmin = i ? std::min(dmin, d) : d;
+      dmax = i ? std::max(dmax, d) : d;
+    }
+    for (double offset : {dmax + eps, dmin - eps}) {
+      Op op;
+      op.kind = OpKind::lift;
+      for (vertex_descriptor v : c) {
+        const Point3d p = p3(v);
+        op.moves.push_back({v, Point(p[0] + offset * n[0], p[1] + offset * n[1], p[2] + offset * n[2])});
+      }
+      ops.push_back(op);
+    }
+    return ops;
+  }
+
+  /// Cost of a move (§4.5, Fig. 9b/c): the volume swept by the faces around
+  /// the moved vertices, each a prism from its old to its new corners split
+  /// into three tetrahedra; plus the cube of the largest vertex move. The
+  /// paper's swept volume alone is zero for a vertex sliding in the plane of
+  /// its faces, however far — a plate's corner sliding along the plate, say
+  /// — which reshapes the mesh as much as any move; the cube is the volume
+  /// scale of the move itself and ranks those (op.shift is set first).
+  double move_cost(const Op& op) const {
+    std::vector<vertex_descriptor> vs;
+    for (const auto& m : op.moves) vs.push_back(m.first);
+    double cost = 0;
+    for (face_descriptor f : star(vs)) {
+      const auto c = corners(f);
+      std::array<Point3d, 3> from, to;
+      for (int k = 0; k < 3; ++k) {
+        from[k] = to[k] = p3(c[k]);
+        for (const auto& [v, p] : op.moves)
+          if (v == c[k]) to[k] = approx_point3d(p);
+      }
+      cost += tet_volume(from[0], from[1], from[2], to[0]) + tet_volume(to[0], from[1], from[2], to[1]) +
+              tet_volume(to[0], to[1], from[2], to[2]);
+    }
+    return cost + op.shift * op.shift * op.shift;
+  }
+
+  /// The cost phase (§4.5): every applicable operation on the intersecting
+  /// faces is tried and retracted; the valid ones come back with their cost.
+  std::vector<Op> cost_phase() {
+    std::vector<face_descriptor> faces;
+    for (face_descriptor f : mesh_.faces())
+      if (!partners_[id(f)].empty()) faces.push_back(f);
+    if (o_.clearance_mode == ClearanceMode::local_thickness) {
+      std::vector<std::array<Point3d, 3>> tris(mesh_.number_of_faces());
+      for (face_descriptor f : mesh_.faces()) {
+        const auto c = corners(f);
+        tris[id(f)] = {p3(c[0]), p3(c[1]), p3(c[2])};
+      }
+      rays_ = std::make_unique<detail::SurfaceDistance>(tris);
+    }
+    // Collected first: the trials below edit (and restore) the mesh.
+    std::vector<std::pair<vertex_descriptor, vertex_descriptor>> edges;
+    std::vector<vertex_descriptor> vertices;
+    std::unordered_set<std::size_t> seen_edges, seen_vertices;
+    for (face_descriptor f : faces)
+      for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_)) {
+        if (seen_edges.insert(static_cast<std::size_t>(mesh_.edge(h))).second && !mesh_.is_border(mesh_.edge(h)))
+          edges.emplace_back(mesh_.source(h), mesh_.target(h));
+        if (seen_vertices.insert(static_cast<std::size_t>(mesh_.target(h))).second) vertices.push_back(mesh_.target(h));
+      }
+    std::vector<Op> ops;
+    if (!o_.swap) edges.clear();
+    if (!o_.hammer) vertices.clear();
+    if (!o_.lift) faces.clear();
+    for (const auto& [a, b] : edges) {
+      Op op;
+      op.kind = OpKind::swap;
+      op.a = a;
+      op.b = b;
+      if (!try_op(op, false)) continue;
+      // Fig. 9a: the tetrahedron of the two old and the two new triangles.
+      const halfedge_descriptor h = CGAL::halfedge(a, b, mesh_).first;
+      op.cost = tet_volume(p3(a), p3(b), p3(mesh_.target(mesh_.next(h))),
+                           p3(mesh_.target(mesh_.next(mesh_.opposite(h)))));
+      ops.push_back(op);
+    }
+    for (vertex_descriptor v : vertices) cheapest_valid(hammer_ops(v), ops);
+    for (face_descriptor f : faces) cheapest_valid(lift_ops(f), ops);
+    return ops;
+  }
+
+  /// Among the valid candidates of one vertex or face, the one that moves
+  /// the mesh least (our choice: minimal repair; the paper takes the
+  /// average or the smaller lift), then the least swept volume.
+  static bool better(const Op& x, const Op& y) { return x.shift != y.shift ? x.shift < y.shift : x.cost < y.cost; }
+
+  /// Tries each of `candidates` (moves of one vertex or one face) that keep
+  /// every vertex within the displacement limit of its input position, and
+  /// appends the best valid one (better()) to `ops`.
+  void cheapest_valid(std::vector<Op> candidates, std::vector<Op>& ops) {
+    std::optional<Op> best;
+    for (Op& op : candidates) {
+      bool within = true;
+      for (const auto& [v, p] : op.moves) {
+        const Point3d to = approx_point3d(p);
+        op.shift = std::max(op.shift, length(sub(to, p3(v))));
+        within = within && length(sub(to, original_[v])) <= r_.max_displacement_allowed;
+      }
+      if (!within) continue;
+      op.cost = move_cost(op);
+      if ((!best || better(op, *best)) && try_op(op, false) > 0) best = op;
+    }
+    if (best) ops.push_back(*best);
+  }
+};
+
+}  // namespace
+
+const char* to_string(ClearanceMode mode) {
+  switch (mode) {
+    case ClearanceMode::edge_relative: return "edge-relative";
+    case ClearanceMode::absolute: return "absolute";
+    case ClearanceMode::local_thickness: return "local";
+    case ClearanceMode::tet_aspect: return "tet-aspect";
+  }
+  return "?";
+}
+
+DeintersectResult remove_self_intersections(const Soup& input, const DeintersectOptions& o) {
+  DeintersectResult result;
+  DeintersectReport& r = result.report;
+  r.clearance_mode = o.clearance_mode;
+  r.clearance = o.clearance;
+  auto t0 = std::chrono::steady_clock::now();
+  if (o.observer) o.observer->stage("detecting");
+  if (!input.is_triangle_soup()) throw UnsupportedInput("not a triangle mesh (polygons with more than 3 corners)");
+  Mesh mesh;
+  const MeshBuildResult built = soup_to_mesh(input, mesh);
+  if (!built.ok)
+    throw UnsupportedInput("not an oriented 2-manifold mesh: " + built.problems.front() +
+                           (built.problems.size() > 1
+                                ? " (and " + std::to_string(built.problems.size() - 1) + " more problems)"
+                                : "") +
+                           "; deintersect needs a manifold mesh");
+  const Report in = inspect(input);
+  r.faces = in.faces;
+  r.vertices = mesh.number_of_vertices();
+  r.degenerate_faces_in = in.degenerate_faces.size();
+  r.topology_in = topology_of(in);
+  r.bbox_diagonal = std::sqrt(std::pow(in.bbox_max[0] - in.bbox_min[0], 2) + std::pow(in.bbox_max[1] - in.bbox_min[1], 2) +
+                              std::pow(in.bbox_max[2] - in.bbox_min[2], 2));
+  auto original = mesh.add_property_map<vertex_descriptor, Point3d>("v:polyheal_original").first;
+  for (vertex_descriptor v : mesh.vertices()) original[v] = approx_point3d(mesh.point(v));
+
+  r.max_displacement_allowed =
+      o.max_displacement >= 0 ? o.max_displacement : o.max_displacement_ratio * r.bbox_diagonal;
+  Deintersector repair(mesh, original, o, r);
+  r.intersecting_faces_in = repair.intersecting_faces();
+  r.intersecting_pairs_in = repair.intersecting_pairs();
+  r.seconds_detect = seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  if (o.observer) o.observer->stage("repairing");
+  repair.run();
+  r.intersecting_faces_exact = repair.intersecting_faces();
+  for (vertex_descriptor v : mesh.vertices()) {
+    const Point3d p = approx_point3d(mesh.point(v));
+    const double d = length(sub(p, original[v]));
+    if (d == 0) continue;
+    ++r.moved_vertices;
+    r.max_displacement = std::max(r.max_displacement, d);
+    r.mean_displacement += d;
+  }
+  if (r.moved_vertices) r.mean_displacement /= double(r.moved_vertices);
+  r.seconds_repair = seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  if (o.observer) o.observer->stage("certifying");
+  result.soup = mesh_to_soup(mesh);
+  if (o.certify) certify(input, result.soup, r);
+  r.seconds_certify = seconds_since(t0);
+  return result;
+}
+
+void certify(const Soup& input, const Soup& written, DeintersectReport& r) {
+  const Report out = inspect(written);
+  r.intersecting_pairs_out = out.self_intersections.size();
+  r.unfreed_faces.clear();
+  for (const FacePair& p : out.self_intersections) {
+    r.unfreed_faces.push_back(p.first);
+    r.unfreed_faces.push_back(p.second);
+  }
+  std::sort(r.unfreed_faces.begin(), r.unfreed_faces.end());
+  r.unfreed_faces.erase(std::unique(r.unfreed_faces.begin(), r.unfreed_faces.end()), r.unfreed_faces.end());
+  r.intersecting_faces_out = r.unfreed_faces.size();
+  r.degenerate_faces_out = out.degenerate_faces.size();
+  r.topology_out = topology_of(out);
+  r.faces_changed = 0;
+  if (written.face_count() == input.face_count())
+    for (std::size_t f = 0; f < written.face_count(); ++f) {
+      const FaceView a = input.face(f), b = written.face(f);
+      bool same = a.size() == b.size();
+      for (std::size_t k = 0; same && k < a.size(); ++k) same = input.points[a[k]] == written.points[b[k]];
+      r.faces_changed += same ? 0 : 1;
+    }
+  // Measured to within a tenth of the largest displacement, and never finer
+  // than 1e-4 of the bbox diagonal (swaps move no vertex but do move the
+  // surface; the cost of the measure grows as the bound shrinks). Zero when
+  // no face changed.
+  const double bound = std::max(0.1 * r.max_displacement, 1e-4 * r.bbox_diagonal);
+  r.hausdorff = r.faces_changed ? detail::hausdorff_distance(input, written, bound) : 0.0;
+  r.hausdorff_error_bound = r.faces_changed ? bound : 0.0;
+  r.certified = r.intersecting_pairs_out == 0 && r.degenerate_faces_out <= r.degenerate_faces_in &&
+                r.topology_out == r.topology_in;
+}
+
+}  // namespace polyheal

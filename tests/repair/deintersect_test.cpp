@@ -1,0 +1,273 @@
+// polyheal deintersect (Yamakawa & Shimada): each case checks the output
+// with the exact oracle on the soup as written (inspect(), independent of
+// the repair's own bookkeeping), measures displacement itself, and for
+// closed meshes asks TetGen, the user's next step.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+#include "polyheal/inspect/report.h"
+#include "polyheal/io/read.h"
+#include "polyheal/io/write.h"
+#include "polyheal/mesh/errors.h"
+#include "polyheal/repair/deintersect.h"
+#include "support/builders.h"
+
+using namespace polyheal;
+
+namespace {
+
+double distance(const Point3d& a, const Point3d& b) {
+  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+/// Largest vertex move between two soups with the same vertices in the
+/// same order (what deintersect keeps for a welded input).
+double max_move(const Soup& in, const Soup& out) {
+  REQUIRE(in.points.size() == out.points.size());
+  double m = 0;
+  for (std::size_t i = 0; i < in.points.size(); ++i) m = std::max(m, distance(in.points[i], out.points[i]));
+  return m;
+}
+
+/// Writes the output to scratch(`name`) and reads it back: the tests
+/// check the file, as the CLI does. `path` (if given) receives its path.
+Soup written(const DeintersectResult& result, const std::string& name, std::string* path = nullptr) {
+  const std::string p = test::scratch(name);
+  write_soup(result.soup, p);
+  if (path) *path = p;
+  return read_soup(p);
+}
+
+/// A horizontal square plate at height z, two triangles, corners at ±h.
+Soup plate(double z, double h = 2.0) {
+  return test::soup({{-h, -h, z}, {h, -h, z}, {h, h, z}, {-h, h, z}}, {{0, 1, 2}, {0, 2, 3}});
+}
+
+/// A tent (Fig. 5/6): apex (x, y, top) over a hexagon of radius `radius` at
+/// height `rim`, open at the bottom; its six apex edges go up through
+/// whatever lies between.
+Soup tent(double top, double x = 0, double y = 0, double radius = 1, double rim = -1) {
+  Soup s;
+  s.points.push_back({x, y, top});
+  for (int k = 0; k < 6; ++k) {
+    const double a = k * 3.14159265358979323846 / 3;
+    s.points.push_back({x + radius * std::cos(a), y + radius * std::sin(a), rim});
+  }
+  for (Index k = 0; k < 6; ++k) s.add_triangle(0, 1 + k, 1 + (k + 1) % 6);
+  return s;
+}
+
+/// One operation alone (&DeintersectOptions::swap, ::hammer or ::lift),
+/// for a toy scene where the defect is a large part of it.
+DeintersectOptions only(bool DeintersectOptions::*op) {
+  DeintersectOptions o;
+  o.swap = o.hammer = o.lift = false;
+  o.*op = true;
+  o.max_displacement = 2.0;
+  return o;
+}
+
+/// Face lifting alone, with an absolute clearance.
+DeintersectOptions lift_only(double clearance) {
+  DeintersectOptions o = only(&DeintersectOptions::lift);
+  o.clearance_mode = ClearanceMode::absolute;
+  o.clearance = clearance;
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("deintersect: thin-walled tube at edge 3.0 and 4.0 comes out intersection-free (Fig. 3)",
+          "[repair][deintersect][tetgen]") {
+  for (const char* name : {"tube_edge3.0.off", "tube_edge4.0.off"}) {
+    INFO(name);
+    const Soup in = read_soup(test::fixture(name));
+    REQUIRE_FALSE(inspect(in).self_intersections.empty());
+    REQUIRE_FALSE(test::tetgen_meshes(test::fixture(name), std::string("deintersect_in_") + name));
+
+    const DeintersectResult result = remove_self_intersections(in);
+    std::string path;
+    const Soup out = written(result, std::string("deintersect_") + name, &path);
+    CHECK_CERTIFIED(out);
+    CHECK(topology_of(inspect(out)) == topology_of(inspect(in)));
+    CHECK(result.report.certified);
+    CHECK(result.report.intersecting_faces_out == 0);
+    // Wall clearance 0.2 (radii 5.0 / 4.8): the repair moves no vertex by
+    // more than twice that.
+    const double moved = max_move(in, out);
+    CHECK(moved > 0);
+    CHECK(moved <= 2 * 0.2);
+    CHECK(result.report.max_displacement == Approx(moved));
+    CHECK(test::tetgen_meshes(path, std::string("deintersect_out_") + name));
+  }
+}
+
+TEST_CASE("deintersect: the clean tube at edge 2.42 comes out untouched", "[repair][deintersect]") {
+  const Soup in = read_soup(test::fixture("tube_edge2.42.off"));
+  REQUIRE(inspect(in).certified_clean());
+  const DeintersectResult result = remove_self_intersections(in);
+  CHECK(result.soup.points == in.points);
+  CHECK(result.soup.indices == in.indices);
+  CHECK(result.report.swaps + result.report.hammers + result.report.lifts == 0);
+  CHECK(result.report.faces_changed == 0);
+}
+
+TEST_CASE("deintersect: edge hammering frees a tent apex poking through a plate (Fig. 5/6a)",
+          "[repair][deintersect]") {
+  // The apex at z = 0.3 pokes through the plate at z = 0: all six apex
+  // edges cross it once. Hammering the apex (one vertex) is the cheapest
+  // fix; the plate, away from what moves, keeps its exact coordinates.
+  const Soup in = test::concat(plate(0.0), tent(0.3));
+  REQUIRE_FALSE(inspect(in).self_intersections.empty());
+  const DeintersectResult result = remove_self_intersections(in, only(&DeintersectOptions::hammer));
+  const Soup out = written(result, "deintersect_hammer.off");
+  const Report r = inspect(out);
+  CHECK(r.self_intersections.empty());
+  CHECK(r.degenerate_faces.empty());
+  CHECK(result.report.hammers >= 1);
+  for (Index v = 0; v < 4; ++v) CHECK(out.points[v] == in.points[v]);  // the plate
+  CHECK(out.points[4][2] < 0.0);                                       // the apex went under it
+  for (Index v = 5; v < 11; ++v) CHECK(out.points[v] == in.points[v]);  // the tent's rim
+}
+
+TEST_CASE("deintersect: an edge crossing two plates moves between them first (Fig. 6b-d)",
+          "[repair][deintersect]") {
+  // Apex at z = 1 above plates at z = 0.5 and z = 0: each apex edge crosses
+  // both. The paper's candidate for several crossings lies between the first
+  // two, so one hammer frees the upper plate without touching the lower one;
+  // rounds continue until the apex is under both.
+  const Soup in = test::concat(test::concat(plate(0.5), plate(0.0)), tent(1.0));
+  REQUIRE_FALSE(inspect(in).self_intersections.empty());
+  const DeintersectResult result = remove_self_intersections(in, only(&DeintersectOptions::hammer));
+  const Soup out = written(result, "deintersect_hammer2.off");
+  CHECK(inspect(out).self_intersections.empty());
+  CHECK(result.report.hammers >= 2);
+  CHECK(result.report.rounds >= 2);
+  for (Index v = 0; v < 8; ++v) CHECK(out.points[v] == in.points[v]);  // both plates
+  CHECK(out.points[8][2] < 0.0);
+}
+
+TEST_CASE("deintersect: face lifting clears a face crossed by several edges (Fig. 7/8a-c)",
+          "[repair][deintersect]") {
+  // A triangle T at z = 0 (inradius 0.35 about the axis) crossed by all six
+  // apex edges of a tent (apex 0.4, rim at -1): the crossing section of the
+  // tent lies inside T, so only T can be lifted. T has no neighbours, so
+  // both n(d_max+ε) and n(d_min-ε) free it; the smaller move wins (up past
+  // the apex: 0.4 + ε, against 1 + ε down). The tent does not move.
+  const Soup t = test::soup({{0, 0.7, 0}, {-0.606, -0.35, 0}, {0.606, -0.35, 0}}, {{0, 1, 2}});
+  const Soup in = test::concat(t, tent(0.4));
+  REQUIRE_FALSE(inspect(in).self_intersections.empty());
+  const DeintersectResult result = remove_self_intersections(in, lift_only(0.05));
+  const Soup out = written(result, "deintersect_lift.off");
+  CHECK(inspect(out).self_intersections.empty());
+  CHECK(result.report.lifts == 1);
+  for (Index v = 0; v < 3; ++v) {
+    CHECK(out.points[v][0] == in.points[v][0]);
+    CHECK(out.points[v][1] == in.points[v][1]);
+    CHECK(out.points[v][2] == Approx(0.4 + 0.05));
+  }
+  for (Index v = 3; v < 10; ++v) CHECK(out.points[v] == in.points[v]);
+}
+
+TEST_CASE("deintersect: a lift that would hit an intersection-free face is refused (Fig. 8d)",
+          "[repair][deintersect]") {
+  // T (z = 0) in a flat fan of three faces; a tent inside T pokes up through
+  // it (apex 0.8, rim -0.2): lifting down by d_min-ε = 0.25 is the smaller
+  // move, but T would then cut a small free tilted plate under its corner
+  // (z from -0.1 to -0.4). The criteria refuse it (no intersection-free
+  // face may start intersecting); T goes up by d_max+ε = 0.85 instead.
+  const Soup fan = test::soup({{0, 0, 0}, {3, 0, 0}, {0, 3, 0}, {-3, -3, 0}}, {{0, 1, 2}, {0, 3, 1}, {0, 2, 3}});
+  const Soup cone = tent(0.8, 1, 1, 0.3, -0.2);
+  const Soup blocker = test::soup({{2.0, 0.2, -0.1}, {2.6, 0.2, -0.4}, {2.3, 0.5, -0.25}}, {{0, 1, 2}});
+  const Soup in = test::concat(test::concat(fan, cone), blocker);
+  REQUIRE_FALSE(inspect(in).self_intersections.empty());
+  const DeintersectResult result = remove_self_intersections(in, lift_only(0.05));
+  const Soup out = written(result, "deintersect_lift_up.off");
+  CHECK(inspect(out).self_intersections.empty());
+  CHECK(result.report.lifts == 1);
+  for (Index v = 0; v < 3; ++v) CHECK(out.points[v][2] == Approx(0.85));  // T went up, over the apex
+  CHECK(out.points[3] == in.points[3]);
+  for (Index v = 4; v < 14; ++v) CHECK(out.points[v] == in.points[v]);  // cone and blocker
+}
+
+TEST_CASE("deintersect: edge swapping removes a ridge edge piercing a plate (Fig. 4)", "[repair][deintersect]") {
+  // Quad a b c d folded along ab (a ridge at z = 0, sides down to -1); a
+  // small vertical plate in x = 0 is pierced by ab. Swapping ab for cd (a
+  // valley at z = -1, below the plate) frees it; nothing moves.
+  const Soup quad = test::soup({{-1, 0, 0}, {1, 0, 0}, {0, 1, -1}, {0, -1, -1}}, {{0, 1, 2}, {1, 0, 3}});
+  const Soup wall = test::soup({{0, -0.1, -0.3}, {0, 0.1, -0.3}, {0, 0, 0.3}}, {{0, 1, 2}});
+  const Soup in = test::concat(quad, wall);
+  REQUIRE(inspect(in).self_intersections.size() == 2);
+  const DeintersectResult result = remove_self_intersections(in, only(&DeintersectOptions::swap));
+  const Soup out = written(result, "deintersect_swap.off");
+  CHECK(inspect(out).self_intersections.empty());
+  CHECK(result.report.swaps == 1);
+  CHECK(out.points == in.points);
+  CHECK(result.report.max_displacement == 0);
+}
+
+TEST_CASE("deintersect: an open mesh from the corpus (scan dragon with a boundary)", "[repair][deintersect]") {
+  // ChineseDragon-10kv: 20k faces, an open boundary, 38 intersecting pairs
+  // (../shared/corpus MANIFEST). Everything else keeps its coordinates.
+  const Soup in = read_soup(test::fixture("ChineseDragon-10kv.off"));
+  const Report before = inspect(in);
+  REQUIRE_FALSE(before.self_intersections.empty());
+  REQUIRE_FALSE(before.closed);
+  const DeintersectResult result = remove_self_intersections(in);
+  const Soup out = written(result, "deintersect_dragon.off");
+  const Report after = inspect(out);
+  CHECK(after.self_intersections.empty());
+  CHECK(after.degenerate_faces.size() <= before.degenerate_faces.size());
+  CHECK(topology_of(after) == topology_of(before));
+  CHECK(result.report.certified);
+  // Minimal repair: a handful of vertices move; every other one is bitwise the input's.
+  std::size_t moved = 0;
+  for (std::size_t i = 0; i < in.points.size(); ++i) moved += in.points[i] == out.points[i] ? 0 : 1;
+  CHECK(moved == result.report.moved_vertices);
+  CHECK(moved < 100);
+  CHECK(max_move(in, out) <= 0.01 * result.report.bbox_diagonal);
+}
+
+TEST_CASE("deintersect: faces it cannot free are reported, never hidden", "[repair][deintersect]") {
+  // Two spheres crossing deeply: no local move frees them. Whatever is left
+  // must be exactly what the oracle finds in the written file.
+  const Soup in = read_soup(test::fixture("spheres_intersecting.off"));
+  const DeintersectResult result = remove_self_intersections(in);
+  const Soup out = written(result, "deintersect_spheres.off");
+  const Report after = inspect(out);
+  CHECK_FALSE(result.report.certified);
+  CHECK(after.self_intersections.size() == result.report.intersecting_pairs_out);
+  CHECK(result.report.intersecting_faces_out > 0);
+  CHECK(result.report.intersecting_faces_out < result.report.intersecting_faces_in);  // never worse
+  CHECK(topology_of(after) == topology_of(inspect(in)));
+}
+
+TEST_CASE("deintersect: no vertex moves further than --max-displacement", "[repair][deintersect]") {
+  // The tent apex 0.3 above the plate must drop about 0.33 to clear it.
+  // Allowed 0.1, no vertex can move that far: faces are left and reported,
+  // and every point is bitwise the input's (a swap moves none). Allowed 0.5,
+  // it is repaired.
+  const Soup in = test::concat(plate(0.0), tent(0.3));
+  DeintersectOptions o;
+  o.max_displacement = 0.1;
+  const DeintersectResult held = remove_self_intersections(in, o);
+  CHECK_FALSE(held.report.certified);
+  CHECK(held.report.intersecting_faces_out > 0);
+  CHECK(held.report.max_displacement == 0);
+  CHECK(held.soup.points == in.points);
+  o.max_displacement = 0.5;
+  const DeintersectResult freed = remove_self_intersections(in, o);
+  CHECK(freed.report.certified);
+  CHECK(freed.report.max_displacement > 0.1);
+  CHECK(freed.report.max_displacement <= 0.5);
+  CHECK(max_move(in, written(freed, "deintersect_capped.off")) <= 0.5);
+}
+
+TEST_CASE("deintersect: a non-manifold soup is refused", "[repair][deintersect]") {
+  // Three triangles on one edge.
+  const Soup in = test::soup({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}},
+                             {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}});
+  CHECK_THROWS_AS(remove_self_intersections(in), UnsupportedInput);
+}
