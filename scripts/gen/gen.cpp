@@ -1,6 +1,7 @@
 // polyheal_gen — generators for test fixtures and benchmark inputs.
 //
 //   polyheal_gen tube --edge 3.0 OUT          Yamakawa & Shimada Fig. 3 thin-walled tube
+//   polyheal_gen narrow-clearance OUT         100k clean faces + 5 such tubes (deintersect bench)
 //   polyheal_gen cylinder --segments 96 OUT   Botsch & Kobbelt Fig. 1 CAD-like cylinder
 //   polyheal_gen torus-knot --faces 1000000 OUT
 //   polyheal_gen torus OUT                    closed torus R=3, r=1
@@ -250,6 +251,26 @@ Soup dirty_box() {
   return s;
 }
 
+/// A large clean mesh with a few small narrow-clearance defects: a torus-knot
+/// tube of `faces` faces and `tubes` copies of the coarse thin-walled tube
+/// (edge 3.0, 220 faces, every face intersecting) in a row beside it — the
+/// benchmark for "work grows with the intersecting region, not the mesh".
+Soup narrow_clearance(std::size_t faces, int tubes) {
+  Soup s = torus_knot(faces, 0.2);
+  double xmax = 0;
+  for (const Point3d& p : s.points) xmax = std::max(xmax, p[0]);
+  for (int k = 0; k < tubes; ++k) {
+    const Soup t = tube(5.0, 4.8, 12.0, 3.0);
+    const Index base = static_cast<Index>(s.points.size());
+    for (const Point3d& p : t.points) s.points.push_back({p[0] + xmax + 6.0 + 11.0 * k, p[1], p[2]});
+    for (std::size_t f = 0; f < t.face_count(); ++f) {
+      const FaceView v = t.face(f);
+      s.add_triangle(base + v[0], base + v[1], base + v[2]);
+    }
+  }
+  return s;
+}
+
 [[noreturn]] void usage() {
   std::fprintf(stderr,
                "usage: polyheal_gen tube [--edge E] [--outer R] [--inner R] [--length L] OUT\n"
@@ -257,7 +278,8 @@ Soup dirty_box() {
                "       polyheal_gen torus-knot [--faces N] OUT\n"
                "       polyheal_gen torus OUT\n"
                "       polyheal_gen offset --distance D IN OUT\n"
-               "       polyheal_gen dirty-box OUT\n");
+               "       polyheal_gen dirty-box OUT\n"
+               "       polyheal_gen narrow-clearance [--faces N] [--tubes K] OUT\n");
   std::exit(2);
 }
 
@@ -287,6 +309,7 @@ int main(int argc, char** argv) {
     else if (cmd == "torus" && pos.size() == 1) s = torus(3, 1, 48, 24);
     else if (cmd == "offset" && pos.size() == 2) s = offset(read_soup(pos[0]), opt("--distance", 0.1));
     else if (cmd == "dirty-box" && pos.size() == 1) s = dirty_box();
+    else if (cmd == "narrow-clearance" && pos.size() == 1) s = narrow_clearance(std::size_t(opt("--faces", 100000)), int(opt("--tubes", 5)));
     else usage();
     WriteOptions w;
     w.allow_overwrite = true;

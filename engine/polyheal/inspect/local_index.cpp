@@ -1,39 +1,42 @@
 #include "polyheal/inspect/local_index.h"
 
 #include <algorithm>
-#include <cmath>
-#include <unordered_map>
+#include <cstdint>
 
 #include "polyheal/inspect/detail/triangle_pair.h"
 
 namespace polyheal {
 namespace {
 
-struct CellKey {
-  std::int64_t x, y, z;
-  bool operator==(const CellKey& o) const { return x == o.x && y == o.y && z == o.z; }
-};
-struct CellHash {
-  std::size_t operator()(const CellKey& k) const {
-    std::uint64_t h = static_cast<std::uint64_t>(k.x) * 0x9E3779B97F4A7C15ull;
-    h ^= static_cast<std::uint64_t>(k.y) * 0xC2B2AE3D27D4EB4Full + (h << 6) + (h >> 2);
-    h ^= static_cast<std::uint64_t>(k.z) * 0x165667B19E3779F9ull + (h << 6) + (h >> 2);
-    return static_cast<std::size_t>(h);
-  }
-};
-
 using Tri = detail::Tri<Kernel>;
-constexpr std::int64_t kMaxCellsPerFace = 512;  // larger faces go to the "oversize" list
+constexpr std::int32_t kNone = -1;
+
+/// Sum of a box's extents: the insertion cost (half the surface-area
+/// heuristic's perimeter analogue; cheap and scale-free).
+double margin(const CGAL::Bbox_3& b) { return (b.xmax() - b.xmin()) + (b.ymax() - b.ymin()) + (b.zmax() - b.zmin()); }
 
 }  // namespace
 
+// A dynamic bounding-volume hierarchy over face boxes (one leaf per face),
+// built top-down by median splits and kept up to date by removing and
+// re-inserting the leaves of changed faces (the descent picks the child whose
+// box grows least). A uniform grid, the first design, broke on meshes mixing
+// scales: a 100k-face fine part beside a few large faces sent every large
+// face's query over the whole mesh (BENCHMARKS.md, deintersect notes).
 struct LocalIndex::Impl {
+  struct Node {
+    CGAL::Bbox_3 box;
+    std::int32_t parent = kNone, left = kNone, right = kNone;
+    std::uint32_t face = 0;  // leaves only
+    bool leaf() const { return left == kNone; }
+  };
+
   const Mesh& mesh;
-  double cell = 1.0;
-  std::unordered_map<CellKey, std::vector<std::uint32_t>, CellHash> cells;
-  std::vector<CGAL::Bbox_3> box;        // by face index
-  std::vector<char> indexed, oversize;
-  std::vector<std::uint32_t> oversize_faces;
+  std::vector<Node> nodes;
+  std::vector<std::int32_t> free_nodes;
+  std::int32_t root = kNone;
+  std::vector<CGAL::Bbox_3> box;          // by face index
+  std::vector<std::int32_t> leaf_of;      // by face index; kNone: not indexed
   std::size_t count = 0;
 
   explicit Impl(const Mesh& m) : mesh(m) {}
@@ -43,47 +46,81 @@ struct LocalIndex::Impl {
     for (vertex_descriptor v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) b += mesh.point(v).bbox();
     return b;
   }
-  std::int64_t lo(double v) const { return static_cast<std::int64_t>(std::floor(v / cell)); }
 
-  template <class Visit>
-  bool for_each_cell(const CGAL::Bbox_3& b, Visit visit) const {
-    const std::int64_t x0 = lo(b.xmin()), x1 = lo(b.xmax()), y0 = lo(b.ymin()), y1 = lo(b.ymax()),
-                       z0 = lo(b.zmin()), z1 = lo(b.zmax());
-    if ((x1 - x0 + 1) * (y1 - y0 + 1) * (z1 - z0 + 1) > kMaxCellsPerFace) return false;
-    for (std::int64_t x = x0; x <= x1; ++x)
-      for (std::int64_t y = y0; y <= y1; ++y)
-        for (std::int64_t z = z0; z <= z1; ++z) visit(CellKey{x, y, z});
-    return true;
+  std::int32_t make_node() {
+    if (!free_nodes.empty()) {
+      const std::int32_t n = free_nodes.back();
+      free_nodes.pop_back();
+      nodes[n] = Node{};
+      return n;
+    }
+    nodes.emplace_back();
+    return static_cast<std::int32_t>(nodes.size() - 1);
   }
 
   void grow(std::size_t i) {
     if (i >= box.size()) {
       box.resize(i + 1);
-      indexed.resize(i + 1, 0);
-      oversize.resize(i + 1, 0);
+      leaf_of.resize(i + 1, kNone);
     }
   }
 
+  /// Balanced subtree over leaves [first, last) of `order` (face ids).
+  std::int32_t build(std::vector<std::uint32_t>& order, std::size_t first, std::size_t last, std::int32_t parent) {
+    const std::int32_t n = make_node();
+    nodes[n].parent = parent;
+    if (last - first == 1) {
+      nodes[n].face = order[first];
+      nodes[n].box = box[order[first]];
+      leaf_of[order[first]] = n;
+      return n;
+    }
+    CGAL::Bbox_3 centres;
+    for (std::size_t k = first; k < last; ++k) {
+      const CGAL::Bbox_3& b = box[order[k]];
+      const double c[3] = {0.5 * (b.xmin() + b.xmax()), 0.5 * (b.ymin() + b.ymax()), 0.5 * (b.zmin() + b.zmax())};
+      centres += CGAL::Bbox_3(c[0], c[1], c[2], c[0], c[1], c[2]);
+    }
+    int axis = 0;
+    for (int d = 1; d < 3; ++d)
+      if (centres.max(d) - centres.min(d) > centres.max(axis) - centres.min(axis)) axis = d;
+    const std::size_t mid = first + (last - first) / 2;
+    std::nth_element(order.begin() + first, order.begin() + mid, order.begin() + last,
+                     [&](std::uint32_t x, std::uint32_t y) {
+                       return box[x].min(axis) + box[x].max(axis) < box[y].min(axis) + box[y].max(axis);
+                     });
+    const std::int32_t l = build(order, first, mid, n), r = build(order, mid, last, n);
+    nodes[n].left = l;
+    nodes[n].right = r;
+    nodes[n].box = nodes[l].box + nodes[r].box;
+    return n;
+  }
+
+  void refit(std::int32_t n) {
+    for (; n != kNone; n = nodes[n].parent) nodes[n].box = nodes[nodes[n].left].box + nodes[nodes[n].right].box;
+  }
+
   void erase(std::uint32_t i) {
-    if (i >= indexed.size() || !indexed[i]) return;
-    auto drop = [&](std::vector<std::uint32_t>& v) {
-      auto it = std::find(v.begin(), v.end(), i);
-      if (it != v.end()) {
-        *it = v.back();
-        v.pop_back();
-      }
-    };
-    if (oversize[i]) drop(oversize_faces);
-    else
-      for_each_cell(box[i], [&](const CellKey& k) {
-        auto it = cells.find(k);
-        if (it != cells.end()) {
-          drop(it->second);
-          if (it->second.empty()) cells.erase(it);
-        }
-      });
-    indexed[i] = oversize[i] = 0;
+    if (i >= leaf_of.size() || leaf_of[i] == kNone) return;
+    const std::int32_t leaf = leaf_of[i];
+    leaf_of[i] = kNone;
     --count;
+    free_nodes.push_back(leaf);
+    const std::int32_t parent = nodes[leaf].parent;
+    if (parent == kNone) {
+      root = kNone;
+      return;
+    }
+    const std::int32_t sibling = nodes[parent].left == leaf ? nodes[parent].right : nodes[parent].left;
+    const std::int32_t grand = nodes[parent].parent;
+    nodes[sibling].parent = grand;
+    free_nodes.push_back(parent);
+    if (grand == kNone) {
+      root = sibling;
+      return;
+    }
+    (nodes[grand].left == parent ? nodes[grand].left : nodes[grand].right) = sibling;
+    refit(grand);
   }
 
   void insert(face_descriptor f) {
@@ -91,15 +128,31 @@ struct LocalIndex::Impl {
     grow(i);
     erase(i);
     box[i] = bbox_of(f);
-    indexed[i] = 1;
     ++count;
-    const bool fits = for_each_cell(box[i], [&](const CellKey&) {});
-    if (!fits) {
-      oversize[i] = 1;
-      oversize_faces.push_back(i);
+    const std::int32_t leaf = make_node();
+    nodes[leaf].face = i;
+    nodes[leaf].box = box[i];
+    leaf_of[i] = leaf;
+    if (root == kNone) {
+      root = leaf;
       return;
     }
-    for_each_cell(box[i], [&](const CellKey& k) { cells[k].push_back(i); });
+    // Descend to the sibling whose box grows least by taking the new one.
+    std::int32_t at = root;
+    while (!nodes[at].leaf()) {
+      const Node& n = nodes[at];
+      const double grow_l = margin(nodes[n.left].box + box[i]) - margin(nodes[n.left].box);
+      const double grow_r = margin(nodes[n.right].box + box[i]) - margin(nodes[n.right].box);
+      at = grow_l <= grow_r ? n.left : n.right;
+    }
+    const std::int32_t parent = make_node(), old_parent = nodes[at].parent;
+    nodes[parent].parent = old_parent;
+    nodes[parent].left = at;
+    nodes[parent].right = leaf;
+    nodes[at].parent = nodes[leaf].parent = parent;
+    if (old_parent == kNone) root = parent;
+    else (nodes[old_parent].left == at ? nodes[old_parent].left : nodes[old_parent].right) = parent;
+    refit(parent);
   }
 
   /// The fan triangles of face f with their vertex ids.
@@ -136,18 +189,23 @@ struct LocalIndex::Impl {
     return detail::faces_intersect<InputKernel>(input(x), input(y));
   }
 
-  /// Indexed faces whose cells b overlaps, sorted and unique.
+  /// Indexed faces whose boxes meet b, sorted.
   void candidates_of(const CGAL::Bbox_3& b, std::vector<std::uint32_t>& out) const {
-    out.assign(oversize_faces.begin(), oversize_faces.end());
-    const bool fits = for_each_cell(b, [&](const CellKey& k) {
-      auto it = cells.find(k);
-      if (it != cells.end()) out.insert(out.end(), it->second.begin(), it->second.end());
-    });
-    if (!fits)  // a huge query box: every indexed face
-      for (std::uint32_t g = 0; g < indexed.size(); ++g)
-        if (indexed[g]) out.push_back(g);
+    out.clear();
+    if (root == kNone) return;
+    std::vector<std::int32_t> stack{root};
+    while (!stack.empty()) {
+      const Node& n = nodes[stack.back()];
+      stack.pop_back();
+      if (!CGAL::do_overlap(n.box, b)) continue;
+      if (n.leaf()) {
+        out.push_back(n.face);
+      } else {
+        stack.push_back(n.left);
+        stack.push_back(n.right);
+      }
+    }
     std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
   }
 
   /// Calls found(f, g) for each intersecting pair; stops when it returns false.
@@ -173,16 +231,16 @@ struct LocalIndex::Impl {
 };
 
 LocalIndex::LocalIndex(const Mesh& mesh) : impl_(std::make_unique<Impl>(mesh)) {
-  double extent = 0;
-  std::size_t n = 0;
+  std::vector<std::uint32_t> order;
   for (face_descriptor f : mesh.faces()) {
-    const CGAL::Bbox_3 b = impl_->bbox_of(f);
-    extent += std::max({b.xmax() - b.xmin(), b.ymax() - b.ymin(), b.zmax() - b.zmin()});
-    ++n;
+    const std::uint32_t i = static_cast<std::uint32_t>(f);
+    impl_->grow(i);
+    impl_->box[i] = impl_->bbox_of(f);
+    order.push_back(i);
   }
-  if (n > 0 && extent > 0) impl_->cell = 2.0 * extent / static_cast<double>(n);
-  impl_->cells.reserve(2 * n);
-  for (face_descriptor f : mesh.faces()) impl_->insert(f);
+  impl_->count = order.size();
+  impl_->nodes.reserve(2 * order.size());
+  if (!order.empty()) impl_->root = impl_->build(order, 0, order.size(), kNone);
 }
 
 LocalIndex::~LocalIndex() = default;

@@ -3,10 +3,12 @@
 //
 // Repairs (deintersect, degenerate, regularize) edit a few faces at a time;
 // verifying an edit must cost time proportional to the edited region, not to
-// the mesh. The index is a hashed uniform grid over face bounding boxes (cell
-// size from the mean face extent); a query visits only the cells its faces
-// overlap, then runs the exact pair test of detail/triangle_pair.h on Epeck
-// points. Same semantics as the global pass (self_intersections.h).
+// the mesh. The index is a dynamic bounding-volume hierarchy over face
+// bounding boxes (balanced when built; a changed face's leaf is removed and
+// re-inserted), so it serves meshes mixing very small and very large faces;
+// a query visits the boxes its faces meet, then runs the exact pair test of
+// detail/triangle_pair.h on Epeck points. Same semantics as the global pass
+// (self_intersections.h).
 //
 // Usage in a repair:
 //   LocalIndex index(mesh);
