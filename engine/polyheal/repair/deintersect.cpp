@@ -364,14 +364,15 @@ class Deintersector {
 
   /// Exact points where segment (from v to b) crosses the faces `others`
   /// that share no vertex with it; a coplanar overlap gives both ends.
-  std::vector<Point> crossings(vertex_descriptor v, vertex_descriptor b,
-                               const std::vector<face_descriptor>& others) const {
+  std::vector<Point> crossings(vertex_descriptor v, vertex_descriptor b, const std::vector<face_descriptor>& others,
+                               std::vector<face_descriptor>& crossed) const {
     const Segment s(mesh_.point(v), mesh_.point(b));
     std::vector<Point> xs;
     for (face_descriptor g : others) {
       if (has_vertex(g, v) || has_vertex(g, b)) continue;
       const Triangle t = triangle(g);
       if (t.is_degenerate() || !CGAL::do_intersect(s, t)) continue;
+      if (std::find(crossed.begin(), crossed.end(), g) == crossed.end()) crossed.push_back(g);
       const auto x = CGAL::intersection(s, t);
       if (!x) continue;
       if (const Point* p = boost::get<Point>(&*x)) xs.push_back(*p);
@@ -388,18 +389,22 @@ class Deintersector {
   /// (x1+x2)/2 for the two nearest to a; and the near candidate, the point
   /// the clearance ε beyond the first crossing, towards b_n (or x2) — the
   /// paper allows anywhere between x and b_n, and §5.2 suggests a clearance
-  /// for hammering too. Ops: a to the average of the paper's candidates (the
-  /// paper's move), to the average of the near ones, and to each candidate
-  /// alone (an average can mix directions that cancel out). The cost phase
-  /// keeps the cheapest valid one.
+  /// for hammering too. With several crossings, also the point ε past the
+  /// last one: the paper warns that passing x2 re-creates a crossing (Fig.
+  /// 6d), which the criteria catch, but when all the crossed faces are one
+  /// thin fold, passing them all frees them all. Ops: a to the average of
+  /// the paper's candidates (the paper's move), to the average of the near
+  /// ones, and to each candidate alone (an average can mix directions that
+  /// cancel out). cheapest_valid keeps the best valid one.
   std::vector<Op> hammer_ops(vertex_descriptor a) const {
     const std::vector<face_descriptor> around = star({a});
     const std::vector<face_descriptor> others = partners_around(around);
     const Point& pa = mesh_.point(a);
     std::vector<Point> paper, near;
+    std::vector<face_descriptor> crossed;  // the faces a's edges cross
     for (halfedge_descriptor h : CGAL::halfedges_around_target(mesh_.halfedge(a), mesh_)) {
       const vertex_descriptor b = mesh_.source(h);
-      std::vector<Point> xs = crossings(a, b, others);
+      std::vector<Point> xs = crossings(a, b, others, crossed);
       if (xs.empty()) continue;
       std::sort(xs.begin(), xs.end(), [&](const Point& x, const Point& y) { return CGAL::has_smaller_distance_to_point(pa, x, y); });
       xs.erase(std::unique(xs.begin(), xs.end()), xs.end());
@@ -411,6 +416,31 @@ class Deintersector {
         const double t = eps / room;
         near.push_back(Point(x[0] + t * towards[0], x[1] + t * towards[1], x[2] + t * towards[2]));
       }
+      if (xs.size() > 1) {
+        const Point3d xl = approx_point3d(xs.back()), to_b = sub(p3(b), xl);
+        const double room2 = length(to_b);
+        if (room2 > 0 && eps < 0.5 * room2) {
+          const double t = eps / room2;
+          near.push_back(Point(xl[0] + t * to_b[0], xl[1] + t * to_b[1], xl[2] + t * to_b[2]));
+        }
+      }
+    }
+    // Through each crossed face g: a moved along g's normal to ε past g's
+    // plane — face lifting (§4.4) with the roles of node and face swapped.
+    // Hammering slides a along its edges; where those run almost parallel
+    // to g (a ring vertex poking through a wall) that is a long way round.
+    std::vector<Point> through;
+    for (face_descriptor g : crossed) {
+      Point3d n = approx_point3d(CGAL::ORIGIN + normal(g));
+      const double len = length(n);
+      if (!(len > 0)) continue;
+      for (double& x : n) x /= len;
+      const double eps = clearance(g, n);
+      if (eps < 0) continue;
+      const Point3d p = p3(a);
+      const double h = dot(sub(p, p3(corners(g)[0])), n);
+      const double step = h + (h >= 0 ? eps : -eps);
+      through.push_back(Point(p[0] - step * n[0], p[1] - step * n[1], p[2] - step * n[2]));
     }
     std::vector<Op> ops;
     auto move_to = [&](const Point& p) {
@@ -424,7 +454,7 @@ class Deintersector {
       for (const Point& p : ps) sum = sum + (p - CGAL::ORIGIN);
       return CGAL::ORIGIN + sum / static_cast<int>(ps.size());
     };
-    for (const std::vector<Point>* set : {&paper, &near}) {
+    for (const std::vector<Point>* set : {&paper, &near, &through}) {
       if (set->empty()) continue;
       move_to(average(*set));
       if (set->size() > 1)
