@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 
 #include "polyheal/inspect/report.h"
 #include "polyheal/io/read.h"
@@ -228,6 +229,44 @@ TEST_CASE("deintersect: an open mesh from the corpus (scan dragon with a boundar
   CHECK(moved == result.report.moved_vertices);
   CHECK(moved < 100);
   CHECK(max_move(in, out) <= 0.01 * result.report.bbox_diagonal);
+}
+
+TEST_CASE("deintersect: a closed corpus mesh TetGen refuses comes out meshable", "[repair][deintersect][tetgen]") {
+  // V-HACD's drum: 29k faces, closed, 160 intersecting pairs (MANIFEST).
+  const Soup in = read_soup(test::fixture("drum.off"));
+  REQUIRE_FALSE(inspect(in).self_intersections.empty());
+  REQUIRE_FALSE(test::tetgen_meshes(test::fixture("drum.off"), "deintersect_drum_in.off"));
+  const DeintersectResult result = remove_self_intersections(in);
+  std::string path;
+  const Soup out = written(result, "deintersect_drum.off", &path);
+  CHECK_CERTIFIED(out);
+  CHECK(topology_of(inspect(out)) == topology_of(inspect(in)));
+  CHECK(max_move(in, out) <= 0.02 * result.report.bbox_diagonal);  // the default limit
+  CHECK(test::tetgen_meshes(path, "deintersect_drum_out.off"));
+}
+
+TEST_CASE("deintersect: a CAD STL with pinch vertices keeps them and comes out intersection-free",
+          "[repair][deintersect]") {
+  // trimesh's angle_block: 33 vertices whose faces form several fans (pinch
+  // points), 102 intersecting pairs. Each fan gets a pinned copy of its
+  // pinch point, which the oracle treats as one vertex; the copies weld
+  // again in the written file.
+  const Soup in = read_soup(test::fixture("angle_block.stl"));
+  const Report before = inspect(in);
+  REQUIRE(before.nonmanifold_vertices.size() == 33);
+  REQUIRE_FALSE(before.self_intersections.empty());
+  const DeintersectResult result = remove_self_intersections(in);
+  const Soup out = written(result, "deintersect_angle_block.stl");
+  const Report after = inspect(out);
+  CHECK(after.self_intersections.empty());
+  CHECK(topology_of(after) == topology_of(before));
+  CHECK(after.nonmanifold_vertices.size() == 33);
+  CHECK(after.degenerate_faces.size() <= before.degenerate_faces.size());
+  CHECK(result.report.certified);
+  // Every pinch point is still there, at its exact input position.
+  std::set<Point3d> pinches_in, points_out(out.points.begin(), out.points.end());
+  for (Index v : before.nonmanifold_vertices) pinches_in.insert(in.points[v]);
+  for (const Point3d& p : pinches_in) CHECK(points_out.count(p) == 1);
 }
 
 TEST_CASE("deintersect: faces it cannot free are reported, never hidden", "[repair][deintersect]") {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <optional>
 
 #include "polyheal/inspect/detail/triangle_pair.h"
 
@@ -39,7 +40,14 @@ struct LocalIndex::Impl {
   std::vector<std::int32_t> leaf_of;      // by face index; kNone: not indexed
   std::size_t count = 0;
 
-  explicit Impl(const Mesh& m) : mesh(m) {}
+  std::optional<Mesh::Property_map<vertex_descriptor, std::uint32_t>> identity;  // kVertexIdentity
+
+  explicit Impl(const Mesh& m) : mesh(m), identity(vertex_identity_map(m)) {}
+
+  /// The id the pair test compares (shared vertex = same id).
+  std::uint32_t id_of(vertex_descriptor v) const {
+    return identity ? (*identity)[v] : static_cast<std::uint32_t>(v);
+  }
 
   CGAL::Bbox_3 bbox_of(face_descriptor f) const {
     CGAL::Bbox_3 b;
@@ -161,7 +169,7 @@ struct LocalIndex::Impl {
     std::vector<std::uint64_t> id;
     for (vertex_descriptor v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) {
       p.push_back(&mesh.point(v));
-      id.push_back(static_cast<std::uint32_t>(v));
+      id.push_back(id_of(v));
     }
     std::vector<Tri> t;
     for (std::size_t k = 1; k + 1 < p.size(); ++k)
@@ -280,8 +288,7 @@ bool LocalIndex::would_intersect(const std::vector<std::array<vertex_descriptor,
   std::vector<CGAL::Bbox_3> boxes;
   for (const auto& t : proposed) {
     const Point &a = mesh.point(t[0]), &b = mesh.point(t[1]), &c = mesh.point(t[2]);
-    tris.push_back({detail::make_tri<Kernel>(a, b, c, static_cast<std::uint32_t>(t[0]),
-                                             static_cast<std::uint32_t>(t[1]), static_cast<std::uint32_t>(t[2]))});
+    tris.push_back({detail::make_tri<Kernel>(a, b, c, impl_->id_of(t[0]), impl_->id_of(t[1]), impl_->id_of(t[2]))});
     boxes.push_back(a.bbox() + b.bbox() + c.bbox());
   }
   for (std::size_t i = 0; i < tris.size(); ++i)

@@ -1,5 +1,7 @@
 #include "polyheal/mesh/convert.h"
 
+#include <map>
+
 #include <algorithm>
 
 #include <cstring>
@@ -121,6 +123,23 @@ MeshBuildResult soup_to_mesh_splitting_pinches(const Soup& input, Mesh& mesh, st
 }
 
 MeshBuildResult soup_to_mesh(const Soup& input, Mesh& mesh) { return build_mesh(input, mesh, true); }
+
+void mark_split_pinches(Mesh& mesh) {
+  std::map<Point3d, std::vector<vertex_descriptor>> at;  // welded before the split: only copies share a point
+  for (vertex_descriptor v : mesh.vertices()) at[approx_point3d(mesh.point(v))].push_back(v);
+  bool any = false;
+  for (const auto& [p, vs] : at) any = any || vs.size() > 1;
+  if (!any) return;
+  auto pinned = mesh.add_property_map<vertex_descriptor, char>(kVertexPinned, 0).first;
+  auto identity = mesh.add_property_map<vertex_descriptor, std::uint32_t>(kVertexIdentity, 0).first;
+  for (vertex_descriptor v : mesh.vertices()) identity[v] = static_cast<std::uint32_t>(v);
+  for (const auto& [p, vs] : at)
+    if (vs.size() > 1)
+      for (vertex_descriptor v : vs) {
+        pinned[v] = 1;
+        identity[v] = static_cast<std::uint32_t>(vs.front());
+      }
+}
 
 namespace {
 

@@ -28,6 +28,13 @@ MeshBuildResult soup_to_mesh(const Soup& soup, Mesh& mesh);
 /// added.
 MeshBuildResult soup_to_mesh_splitting_pinches(const Soup& soup, Mesh& mesh, std::size_t* split = nullptr);
 
+/// After soup_to_mesh_splitting_pinches: the copies of each pinch point
+/// (vertices at one position) get kVertexPinned (no repair may move or remove
+/// one: that would tear the point apart) and one kVertexIdentity, so that
+/// the oracle treats them as the single vertex they are in the file. Does
+/// nothing when no point was split.
+void mark_split_pinches(Mesh& mesh);
+
 /// The mesh as a soup, each exact coordinate rounded to the nearest double
 /// (ties to even; certify after rounding: check the result, not the mesh).
 /// Vertices are renumbered densely.

@@ -53,6 +53,17 @@ inline std::optional<Mesh::Property_map<vertex_descriptor, char>> vertex_pinned_
   return map;
 }
 
+/// Name of the vertex property (std::uint32_t) giving the identity a vertex
+/// has for the oracle: the copies of a split pinch point share one (they are
+/// one vertex in the file), every other vertex has its own index. Absent:
+/// identity = index. Set by mark_split_pinches (convert.h).
+inline constexpr const char* kVertexIdentity = "v:polyheal_identity";
+inline std::optional<Mesh::Property_map<vertex_descriptor, std::uint32_t>> vertex_identity_map(const Mesh& mesh) {
+  const auto [map, found] = mesh.property_map<vertex_descriptor, std::uint32_t>(kVertexIdentity);
+  if (!found) return std::nullopt;
+  return map;
+}
+
 /// p's coordinates as doubles, each within the lazy kernel's interval
 /// approximation (a measurement or a hint, not a certified rounding: that is
 /// mesh_to_soup's nearest-double rounding).

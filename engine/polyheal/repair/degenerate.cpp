@@ -311,16 +311,7 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
                            (built.problems.size() > 1 ? " (and " + std::to_string(built.problems.size() - 1) +
                                                             " more problems)"
                                                       : ""));
-  if (r.pinched_vertices_split > 0) {  // the copies (and their originals) must stay
-    auto pinned = mesh.add_property_map<vertex_descriptor, char>(kVertexPinned, 0).first;
-    std::map<std::array<double, 3>, std::vector<vertex_descriptor>> at;
-    for (vertex_descriptor v : mesh.vertices()) {
-      at[approx_point3d(mesh.point(v))].push_back(v);
-    }
-    for (const auto& [p, vs] : at)
-      if (vs.size() > 1)
-        for (vertex_descriptor v : vs) pinned[v] = 1;
-  }
+  mark_split_pinches(mesh);  // the copies must stay, and are one vertex to the oracle
   const detail::SurfaceDistance distance(clean);
   Pipeline pipeline(mesh, distance, o, r);
   r.seconds_preprocess = seconds_since(t0);

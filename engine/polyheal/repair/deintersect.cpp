@@ -66,7 +66,9 @@ class Deintersector {
   /// further than r.max_displacement_allowed from it.
   Deintersector(Mesh& mesh, Mesh::Property_map<vertex_descriptor, Point3d> original, const DeintersectOptions& o,
                 DeintersectReport& r)
-      : mesh_(mesh), original_(original), o_(o), r_(r), index_(mesh), partners_(mesh.number_of_faces()) {
+      : mesh_(mesh), original_(original), pinned_(vertex_pinned_map(mesh)), identity_(vertex_identity_map(mesh)),
+        o_(o), r_(r), index_(mesh),
+        partners_(mesh.number_of_faces()) {
     std::vector<face_descriptor> all(mesh.faces().begin(), mesh.faces().end());
     for (const auto& [f, g] : index_.intersections(all)) link(f, g);
   }
@@ -103,6 +105,8 @@ class Deintersector {
  private:
   Mesh& mesh_;
   Mesh::Property_map<vertex_descriptor, Point3d> original_;
+  std::optional<Mesh::Property_map<vertex_descriptor, char>> pinned_;  // pinch-point copies: never moved
+  std::optional<Mesh::Property_map<vertex_descriptor, std::uint32_t>> identity_;  // pinch-point copies: one vertex
   const DeintersectOptions& o_;
   DeintersectReport& r_;
   LocalIndex index_;
@@ -352,9 +356,13 @@ class Deintersector {
     return out;
   }
 
+  /// Does f have v as a corner — or another copy of v's pinch point (one
+  /// vertex for the oracle, kVertexIdentity)?
   bool has_vertex(face_descriptor f, vertex_descriptor v) const {
     const auto c = corners(f);
-    return c[0] == v || c[1] == v || c[2] == v;
+    if (!identity_) return c[0] == v || c[1] == v || c[2] == v;
+    const std::uint32_t i = (*identity_)[v];
+    return (*identity_)[c[0]] == i || (*identity_)[c[1]] == i || (*identity_)[c[2]] == i;
   }
 
   Triangle triangle(face_descriptor f) const {
@@ -620,7 +628,8 @@ class Deintersector {
   static bool better(const Op& x, const Op& y) { return x.shift != y.shift ? x.shift < y.shift : x.cost < y.cost; }
 
   /// Tries each of `candidates` (moves of one vertex or one face) that keep
-  /// every vertex within the displacement limit of its input position, and
+  /// every vertex within the displacement limit of its input position and
+  /// move no pinch-point copy, and
   /// appends the best valid one (better()) to `ops`.
   void cheapest_valid(std::vector<Op> candidates, std::vector<Op>& ops) {
     std::optional<Op> best;
@@ -629,7 +638,7 @@ class Deintersector {
       for (const auto& [v, p] : op.moves) {
         const Point3d to = approx_point3d(p);
         op.shift = std::max(op.shift, length(sub(to, p3(v))));
-        within = within && length(sub(to, original_[v])) <= r_.max_displacement_allowed;
+        within = within && length(sub(to, original_[v])) <= r_.max_displacement_allowed && !(pinned_ && (*pinned_)[v]);
       }
       if (!within) continue;
       op.cost = move_cost(op);
@@ -660,13 +669,18 @@ DeintersectResult remove_self_intersections(const Soup& input, const Deintersect
   if (o.observer) o.observer->stage("detecting");
   if (!input.is_triangle_soup()) throw UnsupportedInput("not a triangle mesh (polygons with more than 3 corners)");
   Mesh mesh;
-  const MeshBuildResult built = soup_to_mesh(input, mesh);
+  // Pinch points (vertices whose faces form several fans, common in CAD STL
+  // exports) get one copy per fan, pinned in place; the copies weld again on
+  // output, and the oracle treats them as the one vertex they are.
+  std::size_t pinches = 0;
+  const MeshBuildResult built = soup_to_mesh_splitting_pinches(input, mesh, &pinches);
   if (!built.ok)
     throw UnsupportedInput("not an oriented 2-manifold mesh: " + built.problems.front() +
                            (built.problems.size() > 1
                                 ? " (and " + std::to_string(built.problems.size() - 1) + " more problems)"
                                 : "") +
-                           "; deintersect needs a manifold mesh");
+                           "; deintersect needs a manifold mesh (pinch vertices are fine)");
+  mark_split_pinches(mesh);
   const Report in = inspect(input);
   r.faces = in.faces;
   r.vertices = mesh.number_of_vertices();

@@ -4,7 +4,8 @@
 //
 // `polyheal deintersect`, stage by stage:
 //   1. detect     build the working mesh (an oriented 2-manifold, open or
-//                 closed; anything else is refused) and find every
+//                 closed, pinch vertices allowed: each fan gets a pinned copy
+//                 of the vertex; anything else is refused) and find every
 //                 intersecting pair with the oracle's local index.
 //   2. repair     rounds of the paper's two-phase scheme (§4.5). The cost
 //                 phase tries every applicable operation on the faces that
@@ -106,7 +107,7 @@ struct DeintersectResult {
 
 /// Stages 1-2 and, with options.certify, stage 3 on the rounded result.
 /// Throws UnsupportedInput for a soup that is not an oriented 2-manifold
-/// triangle mesh.
+/// triangle mesh (pinch vertices allowed).
 DeintersectResult remove_self_intersections(const Soup& input, const DeintersectOptions& options = {});
 
 /// Stage 3 on `written` (the output as read back; `input` as given): fills
