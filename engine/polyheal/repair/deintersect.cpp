@@ -64,13 +64,23 @@ class Deintersector {
  public:
   /// `original`: every vertex's input position; no move takes a vertex
   /// further than r.max_displacement_allowed from it.
-  Deintersector(Mesh& mesh, Mesh::Property_map<vertex_descriptor, Point3d> original, const DeintersectOptions& o,
-                DeintersectReport& r)
+  /// `pairs`: the input's intersecting pairs by input face id (the global
+  /// pass of inspect(), same semantics as the local index; the mesh's faces
+  /// carry their input ids in kFaceOrigin).
+  Deintersector(Mesh& mesh, Mesh::Property_map<vertex_descriptor, Point3d> original, const std::vector<FacePair>& pairs,
+                const DeintersectOptions& o, DeintersectReport& r)
       : mesh_(mesh), original_(original), pinned_(vertex_pinned_map(mesh)), identity_(vertex_identity_map(mesh)),
         o_(o), r_(r), index_(mesh),
         partners_(mesh.number_of_faces()) {
-    std::vector<face_descriptor> all(mesh.faces().begin(), mesh.faces().end());
-    for (const auto& [f, g] : index_.intersections(all)) link(f, g);
+    const auto origin = face_origin_map(mesh);
+    std::vector<face_descriptor> by_input;
+    for (face_descriptor f : mesh.faces()) {
+      const std::int64_t i = origin ? (*origin)[f] : static_cast<std::int64_t>(f);
+      if (i < 0) continue;
+      if (by_input.size() <= std::size_t(i)) by_input.resize(std::size_t(i) + 1, Mesh::null_face());
+      by_input[std::size_t(i)] = f;
+    }
+    for (const FacePair& p : pairs) link(by_input.at(p.first), by_input.at(p.second));
   }
 
   std::size_t intersecting_faces() const { return intersecting_; }
@@ -693,7 +703,7 @@ DeintersectResult remove_self_intersections(const Soup& input, const Deintersect
 
   r.max_displacement_allowed =
       o.max_displacement >= 0 ? o.max_displacement : o.max_displacement_ratio * r.bbox_diagonal;
-  Deintersector repair(mesh, original, o, r);
+  Deintersector repair(mesh, original, in.self_intersections, o, r);
   r.intersecting_faces_in = repair.intersecting_faces();
   r.intersecting_pairs_in = repair.intersecting_pairs();
   r.seconds_detect = seconds_since(t0);
