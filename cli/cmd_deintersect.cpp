@@ -108,8 +108,9 @@ nlohmann::json to_json(const DeintersectArgs& a, const DeintersectReport& r, dou
 void print_text(const DeintersectArgs& a, const DeintersectReport& r) {
   const double diag = r.bbox_diagonal > 0 ? r.bbox_diagonal : 1.0;
   std::printf("%s -> %s\n", a.input.c_str(), a.output.c_str());
-  std::printf("  %zu faces, %zu vertices; clearance %s %g\n", r.faces, r.vertices, to_string(r.clearance_mode),
-              r.clearance);
+  std::printf("  %zu faces, %zu vertices; clearance %s", r.faces, r.vertices, to_string(r.clearance_mode));
+  if (r.clearance_mode == ClearanceMode::local_thickness) std::printf(" (median ray distance to the next face)\n");
+  else std::printf(" %g\n", r.clearance);
   std::printf("  intersecting faces: %zu -> %zu (pairs %zu -> %zu)\n", r.intersecting_faces_in, r.intersecting_faces_out,
               r.intersecting_pairs_in, r.intersecting_pairs_out);
   std::printf("  operations: %zu swaps, %zu hammers, %zu lifts in %d rounds (%zu trials, %zu stale)\n", r.swaps,

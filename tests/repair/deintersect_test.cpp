@@ -304,6 +304,25 @@ TEST_CASE("deintersect: no vertex moves further than --max-displacement", "[repa
   CHECK(max_move(in, written(freed, "deintersect_capped.off")) <= 0.5);
 }
 
+TEST_CASE("deintersect: operations tried and retracted leave no trace", "[repair][deintersect]") {
+  // With a clearance of a fifth of the edge length no lift fits the default
+  // displacement limit, and on this tube no swap alone helps: every trial is
+  // made and undone. The output must be the input, index for index (an
+  // undone swap once left its faces' corners rotated).
+  const Soup in = read_soup(test::fixture("tube_edge4.0.off"));
+  DeintersectOptions o = only(&DeintersectOptions::swap);
+  o.lift = true;
+  o.max_displacement = -1;  // the default limit
+  o.clearance_mode = ClearanceMode::tet_aspect;
+  o.clearance = 5;
+  const DeintersectResult result = remove_self_intersections(in, o);
+  REQUIRE(result.report.trials > 0);
+  REQUIRE(result.report.swaps + result.report.lifts == 0);
+  CHECK(result.soup.points == in.points);
+  CHECK(result.soup.indices == in.indices);
+  CHECK(result.report.faces_changed == 0);
+}
+
 TEST_CASE("deintersect: a non-manifold soup is refused", "[repair][deintersect]") {
   // Three triangles on one edge.
   const Soup in = test::soup({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}},

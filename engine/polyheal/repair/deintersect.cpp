@@ -339,6 +339,7 @@ class Deintersector {
       if (CGAL::degree(v, mesh_) <= (mesh_.is_border(v, true) ? 2u : 3u)) return 0;
     const std::vector<face_descriptor> changed{mesh_.face(h), mesh_.face(o)};
     const std::vector<Vector> before{normal(changed[0]), normal(changed[1])};
+    const halfedge_descriptor start[2] = {mesh_.halfedge(changed[0]), mesh_.halfedge(changed[1])};
     // The quad's four outer edges keep their halfedges through the flip.
     const auto unfolded = unfolded_edges({mesh_.next(h), mesh_.prev(h), mesh_.next(o), mesh_.prev(o)});
     CGAL::Euler::flip_edge(h, mesh_);
@@ -350,7 +351,11 @@ class Deintersector {
     // Each flip turns h one step around the quad (ab, cd, ba, dc): three more
     // bring back ab with every face holding its own triangle again (two
     // would swap the faces' triangles).
+    // Each face also gets back the halfedge it started from (a flip points it
+    // at h), so its corners come out in the input's order.
     for (int k = 0; k < 3; ++k) CGAL::Euler::flip_edge(h, mesh_);
+    mesh_.set_halfedge(changed[0], start[0]);
+    mesh_.set_halfedge(changed[1], start[1]);
     index_.update(changed);
     return ok;
   }
