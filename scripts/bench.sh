@@ -114,8 +114,9 @@ for f in "${di_inputs[@]}"; do
   read -r ours_s ours_kb < <(tail -n 1 "$work/time.txt")
   faces=$({ "$b/polyheal" check --json "$f" 2>/dev/null || true; } | sed -n 's/.*"faces": \([0-9]*\).*/\1/p' | head -1)
   if [ "$code" -ge 2 ]; then
-    why=$(head -c 60 "$work/di.err" | sed 's/.*: not an/not an/; s/|/\//g')
-    ours="| — | refused: ${why}… | | | | "
+    why=$(sed -n 's/.*is non-manifold: shared by.*/an edge with 3+ faces/p; s/.*repeats a vertex.*/a face repeating a vertex/p;
+                 s/.*polygons with more than 3 corners.*/polygons/p; s/.*disagree in orientation.*/misoriented faces/p' "$work/di.err" | head -1)
+    ours="| — | refused: ${why:-see polyheal check} | | | | "
     in_faces="—"; ours_ok=0; ours_faithful=0
   else
     in_faces=$(sed -n '/"intersecting_faces"/,/}/p' "$work/di.json" | json_num input /dev/stdin)
