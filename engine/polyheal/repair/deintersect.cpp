@@ -203,7 +203,8 @@ class Deintersector {
   }
 
   /// Per face of `faces`: is it folded against a neighbour now (normals
-  /// with a non-positive dot product across an edge)?
+  /// with a negative dot product across an edge: a dihedral angle below 90
+  /// degrees, an inverted sliver; a CAD right angle is not a fold)?
   std::vector<char> folded_faces(const std::vector<face_descriptor>& faces) const {
     std::vector<char> out;
     for (face_descriptor f : faces) {
@@ -211,7 +212,7 @@ class Deintersector {
       char folded = 0;
       for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_)) {
         const face_descriptor g = mesh_.face(mesh_.opposite(h));
-        if (g != Mesh::null_face() && !CGAL::is_positive(n * normal(g))) folded = 1;
+        if (g != Mesh::null_face() && CGAL::is_negative(n * normal(g))) folded = 1;
       }
       out.push_back(folded);
     }
@@ -241,10 +242,11 @@ class Deintersector {
   // ---- the improvement criteria (§4.1) ------------------------------------
 
   /// With `changed` edited in place and re-indexed: do the pairs `now`
-  /// satisfy §4.1? Returns how many fewer faces intersect (0: refused). The number of intersecting faces strictly decreases and
-  /// no intersection-free face becomes intersecting. For a swap the two
+  /// satisfy §4.1 — the number of intersecting faces strictly decreases and
+  /// no intersection-free face becomes intersecting? For a swap the two
   /// faces are new triangles, so only their number is compared: no more of
-  /// them intersect than of the two they replace.
+  /// them intersect than of the two they replace. Returns how many fewer
+  /// faces intersect; 0 when refused.
   long gain(const std::vector<face_descriptor>& changed,
                 const std::vector<std::pair<face_descriptor, face_descriptor>>& now, bool swap) const {
     auto in_changed = [&](face_descriptor f) { return std::find(changed.begin(), changed.end(), f) != changed.end(); };

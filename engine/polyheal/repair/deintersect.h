@@ -23,9 +23,11 @@
 // decided exactly by the oracle's local query (inspect/local_index.h): the
 // number of intersecting faces strictly decreases and no face that was
 // intersection-free becomes intersecting. It is also refused when a face it
-// changes becomes degenerate (exactly collinear), turns its normal around,
-// or folds against a neighbour it did not fold against before; a swap is
-// refused when it would duplicate an edge. A refused operation is undone
+// changes becomes degenerate (exactly collinear), turns its normal around
+// (unless it was folded against a neighbour before: an inverted sliver may
+// turn back), or folds against a neighbour it did not fold against before;
+// when it moves a vertex further than the displacement limit or moves a
+// pinch-point copy; a swap is refused when it would duplicate an edge. A refused operation is undone
 // exactly (the previous exact coordinates and connectivity come back).
 //
 // Rounding policy (ARCHITECTURE.md, certify after rounding): candidate
