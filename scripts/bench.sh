@@ -104,6 +104,15 @@ di_inputs+=("$root/fixtures/tube_edge2.42_offset-0.15.off")
 "$b/polyheal_gen" narrow-clearance --faces 100000 --tubes 5 "$work/narrow_clearance_100k.off" >/dev/null
 di_inputs+=("$work/narrow_clearance_100k.off")
 while IFS= read -r f; do di_inputs+=("$corpus/$f"); done < <(awk -F'\t' 'NR > 1 && $11 > 0 {print $1}' "$corpus/MANIFEST.tsv")
+# tetgen_verdict FILE: "yes"/"no" when `tetgen -pYQ` (2 minutes at most) meshes
+# the file / does not; "—" when the file is not closed (TetGen needs a volume).
+tetgen_verdict() {
+  local closed
+  closed=$({ "$b/polyheal" check --json "$1" 2>/dev/null || true; } | sed -n 's/.*"closed": \(true\|false\).*/\1/p' | head -1)
+  [ "$closed" = true ] || { echo "—"; return; }
+  cp "$1" "$work/tetgen_probe.off"
+  if timeout 120 tetgen -pYQ "$work/tetgen_probe.off" >/dev/null 2>&1; then echo yes; else echo no; fi
+}
 di_rows=""; di_corpus=0; di_ours=0; di_cgal=0; di_ours_faithful=0; di_cgal_faithful=0
 for f in "${di_inputs[@]}"; do
   [ -f "$f" ] || continue
@@ -116,7 +125,7 @@ for f in "${di_inputs[@]}"; do
   if [ "$code" -ge 2 ]; then
     why=$(sed -n 's/.*is non-manifold: shared by.*/an edge with 3+ faces/p; s/.*repeats a vertex.*/a face repeating a vertex/p;
                  s/.*polygons with more than 3 corners.*/polygons/p; s/.*disagree in orientation.*/misoriented faces/p' "$work/di.err" | head -1)
-    ours="| — | refused: ${why:-see polyheal check} | | | | "
+    ours="| — | refused: ${why:-see polyheal check} | | | | | "
     in_faces="—"; ours_ok=0; ours_faithful=0
   else
     in_faces=$(sed -n '/"intersecting_faces"/,/}/p' "$work/di.json" | json_num input /dev/stdin)
@@ -125,16 +134,16 @@ for f in "${di_inputs[@]}"; do
     move_rel=$(json_num max_vertex_displacement_relative "$work/di.json")
     h_rel=$(json_num hausdorff_relative "$work/di.json")
     changed=$(json_num faces_changed "$work/di.json")
-    ours="| $left | $(awk "BEGIN{printf \"%.3g (%.2g%%)\", $move, 100 * $move_rel}") | $(awk "BEGIN{printf \"%.2g%%\", 100 * $h_rel}") | $changed | $ours_s s, $((ours_kb / 1024)) MB "
+    ours="| $left | $(awk "BEGIN{printf \"%.3g (%.2g%%)\", $move, 100 * $move_rel}") | $(awk "BEGIN{printf \"%.2g%%\", 100 * $h_rel}") | $changed | $ours_s s, $((ours_kb / 1024)) MB | $(tetgen_verdict "$work/di_ours.off") "
     ours_ok=$([ "$left" = 0 ] && echo 1 || echo 0)
     ours_faithful=$(awk "BEGIN{print ($ours_ok && $h_rel <= 0.01) ? 1 : 0}")
   fi
-  peer="| crashed or timed out | | | "; cgal_ok=0; cgal_faithful=0
+  peer="| crashed or timed out | | | | "; cgal_ok=0; cgal_faithful=0
   if timeout 1200 "$b/cgal_deintersect_peer" "$f" "$work/di_cgal.off" > "$work/peer.txt" 2>/dev/null; then
     read -r cg_s cg_faces cg_still cg_h cg_diag cg_ok < "$work/peer.txt"
     cg_pairs=$({ "$b/polyheal" check --json "$work/di_cgal.off" 2>/dev/null || true; } | sed -n 's/.*"self_intersecting_pairs": \([0-9]*\).*/\1/p' | head -1)
     cg_hrel=$(awk "BEGIN{printf \"%.2g\", ($cg_diag > 0 ? $cg_h / $cg_diag : 0)}")
-    peer="| ${cg_pairs:-?} | $cg_faces | $(awk "BEGIN{printf \"%.2g%%\", 100 * $cg_hrel}") | $cg_s s "
+    peer="| ${cg_pairs:-?} | $cg_faces | $(awk "BEGIN{printf \"%.2g%%\", 100 * $cg_hrel}") | $cg_s s | $(tetgen_verdict "$work/di_cgal.off") "
     cgal_ok=$([ "${cg_pairs:-1}" = 0 ] && echo 1 || echo 0)
     cgal_faithful=$(awk "BEGIN{print ($cgal_ok && $cg_faces == ${faces:-0} && $cg_hrel <= 0.01) ? 1 : 0}")
   fi
@@ -209,10 +218,12 @@ CGAL's "faces out" shows what it deleted and re-filled; polyheal keeps every fac
 (swaps re-connect, moves move). The `tube_edge*` rows are the generated
 thin-walled tube (wall clearance 0.2, so the target move is 0.4);
 `narrow_clearance_100k` is a 100k-face clean mesh with five such tubes
-(1100 intersecting faces, 1.1%). One run each, whole process.
+(1100 intersecting faces, 1.1%). "TetGen": does `tetgen -pYQ` (Debian's, 2 minutes at
+most) tetrahedralise the output — "—" when the output is not closed. One run each,
+whole process.
 
-| input | faces | intersecting faces in | polyheal left | polyheal move | polyheal Hausdorff | polyheal faces changed | polyheal time | CGAL left (pairs) | CGAL faces out | CGAL Hausdorff | CGAL time |
-| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |
+| input | faces | intersecting faces in | polyheal left | polyheal move | polyheal Hausdorff | polyheal faces changed | polyheal time | TetGen on polyheal's | CGAL left (pairs) | CGAL faces out | CGAL Hausdorff | CGAL time | TetGen on CGAL's |
+| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: | --- |
 TAIL
   printf "%s" "$di_rows"
   cat <<TAIL
