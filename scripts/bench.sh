@@ -125,7 +125,7 @@ for f in "${di_inputs[@]}"; do
   if [ "$code" -ge 2 ]; then
     why=$(sed -n 's/.*is non-manifold: shared by.*/an edge with 3+ faces/p; s/.*repeats a vertex.*/a face repeating a vertex/p;
                  s/.*polygons with more than 3 corners.*/polygons/p; s/.*disagree in orientation.*/misoriented faces/p' "$work/di.err" | head -1)
-    ours="| — | refused: ${why:-see polyheal check} | | | | | "
+    ours="| — | refused: ${why:-see polyheal check} | | | | "
     in_faces="—"; ours_ok=0; ours_faithful=0
   else
     in_faces=$(sed -n '/"intersecting_faces"/,/}/p' "$work/di.json" | json_num input /dev/stdin)
