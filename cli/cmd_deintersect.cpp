@@ -147,9 +147,10 @@ void add_deintersect(CLI::App& app, int& exit_code) {
   cmd->footer(
       "Each operation is kept only if, decided exactly, the number of intersecting\n"
       "faces drops and no intersection-free face starts intersecting; it must also\n"
-      "leave no degenerate, turned or folded face. Operations are tried, costed by\n"
-      "the volume they sweep, and applied cheapest first, in rounds. Faces away from\n"
-      "the intersections keep their exact input coordinates.\n"
+      "leave no degenerate, turned or folded face and move no vertex further than\n"
+      "--max-displacement. Operations are tried, costed by the volume they sweep,\n"
+      "and applied cheapest first, in rounds. Faces away from the intersections keep\n"
+      "their exact input coordinates; every face is kept (swaps re-connect, moves move).\n"
       "Clearance (how far a lifted face clears the nodes it was crossing): by default\n"
       "2% of the lifted face's longest edge; --clearance D in model units;\n"
       "--clearance local from the local thickness (rays along the face normal);\n"

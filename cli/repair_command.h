@@ -22,7 +22,9 @@ struct RepairFiles {
 
 /// IN, -o, --json (naming `schema`), --list (`list_help`), --ascii, --overwrite.
 inline void add_repair_files(CLI::App* cmd, RepairFiles& f, const std::string& schema, const std::string& list_help) {
-  cmd->add_option("IN", f.input, "input mesh (.off, .obj, .stl, .ply): an oriented 2-manifold, open or closed")
+  cmd->add_option("IN", f.input,
+                  "input mesh (.off, .obj, .stl, .ply): an oriented 2-manifold, open or closed (pinch vertices "
+                  "allowed)")
       ->required();
   cmd->add_option("-o,--output", f.output, "output mesh; format from the extension")->required();
   cmd->add_flag("--json", f.json, "print one JSON document (schema " + schema + ", see README)");
