@@ -51,6 +51,11 @@ grep_out "nonmanifold.off: not an oriented 2-manifold mesh" "$tmp/err" "non-mani
 expect 2 "degenerate bad tolerance" -- "$bin" degenerate "$tmp/tjunction.off" -o "$tmp/x.off" --tolerance abc
 expect 2 "degenerate malformed input" -- "$bin" degenerate "$tmp/bad.off" -o "$tmp/x.off"
 [ ! -e "$tmp/x.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: output written on error"; }
+# A CAD STL with pinch vertices and intersections: degenerate must end with a
+# verdict (0 or 1), never a crash (a pinch-identity default once aliased new
+# vertices to vertex 0 and crashed the pair test).
+"$bin" degenerate "$src/fixtures/angle_block.stl" -o "$tmp/ab_deg.off" >/dev/null 2>&1; code=$?
+[ "$code" -le 1 ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: degenerate on angle_block.stl: exit $code"; }
 # polyheal deintersect
 expect 0 "deintersect frees the coarse tube" -- "$bin" deintersect "$src/fixtures/tube_edge3.0.off" -o "$tmp/tube_out.off"
 grep_out "intersecting faces: 220 -> 0" "$tmp/out" "deintersect reports faces before and after"

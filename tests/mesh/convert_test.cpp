@@ -83,3 +83,29 @@ TEST_CASE("convert: exact coordinates round to the nearest double", "[mesh]") {
   CHECK(s.points[1][0] == 1.0 / 27);
   CHECK(s.points[1][1] == 1e300 / 7);
 }
+
+TEST_CASE("convert: pinch copies share one identity; every other vertex, old or new, is itself", "[mesh]") {
+  // Two tetrahedra touching at one corner, the origin: a pinch point whose
+  // two fans get a vertex each.
+  const Soup touching = test::concat(test::tetrahedron(), test::tetrahedron(-1, 0, 0));
+  Mesh m;
+  std::size_t split = 0;
+  REQUIRE(soup_to_mesh_splitting_pinches(touching, m, &split).ok);
+  REQUIRE(split == 1);
+  mark_split_pinches(m);
+  const auto identity = vertex_identity_map(m);
+  const auto pinned = vertex_pinned_map(m);
+  REQUIRE(identity);
+  REQUIRE(pinned);
+  std::vector<vertex_descriptor> at_origin;
+  for (vertex_descriptor v : m.vertices())
+    if (m.point(v) == Point(0, 0, 0)) at_origin.push_back(v);
+    else CHECK(vertex_identity(identity, v) == static_cast<std::uint32_t>(v));
+  REQUIRE(at_origin.size() == 2);
+  CHECK(vertex_identity(identity, at_origin[0]) == vertex_identity(identity, at_origin[1]));
+  CHECK(((*pinned)[at_origin[0]] && (*pinned)[at_origin[1]]));
+  // A vertex added afterwards (as slicing does) is itself, not a copy of
+  // another: the property's default must not alias it to vertex 0.
+  const vertex_descriptor added = m.add_vertex(Point(5, 5, 5));
+  CHECK(vertex_identity(identity, added) == static_cast<std::uint32_t>(added));
+}

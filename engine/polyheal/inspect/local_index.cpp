@@ -40,14 +40,12 @@ struct LocalIndex::Impl {
   std::vector<std::int32_t> leaf_of;      // by face index; kNone: not indexed
   std::size_t count = 0;
 
-  std::optional<Mesh::Property_map<vertex_descriptor, std::uint32_t>> identity;  // kVertexIdentity
+  std::optional<VertexIdentityMap> identity;  // kVertexIdentity
 
   explicit Impl(const Mesh& m) : mesh(m), identity(vertex_identity_map(m)) {}
 
   /// The id the pair test compares (shared vertex = same id).
-  std::uint32_t id_of(vertex_descriptor v) const {
-    return identity ? (*identity)[v] : static_cast<std::uint32_t>(v);
-  }
+  std::uint32_t id_of(vertex_descriptor v) const { return vertex_identity(identity, v); }
 
   CGAL::Bbox_3 bbox_of(face_descriptor f) const {
     CGAL::Bbox_3 b;

@@ -131,8 +131,7 @@ void mark_split_pinches(Mesh& mesh) {
   for (const auto& [p, vs] : at) any = any || vs.size() > 1;
   if (!any) return;
   auto pinned = mesh.add_property_map<vertex_descriptor, char>(kVertexPinned, 0).first;
-  auto identity = mesh.add_property_map<vertex_descriptor, std::uint32_t>(kVertexIdentity, 0).first;
-  for (vertex_descriptor v : mesh.vertices()) identity[v] = static_cast<std::uint32_t>(v);
+  auto identity = mesh.add_property_map<vertex_descriptor, std::uint32_t>(kVertexIdentity, kOwnIdentity).first;
   for (const auto& [p, vs] : at)
     if (vs.size() > 1)
       for (vertex_descriptor v : vs) {

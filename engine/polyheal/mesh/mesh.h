@@ -55,13 +55,21 @@ inline std::optional<Mesh::Property_map<vertex_descriptor, char>> vertex_pinned_
 
 /// Name of the vertex property (std::uint32_t) giving the identity a vertex
 /// has for the oracle: the copies of a split pinch point share one (they are
-/// one vertex in the file), every other vertex has its own index. Absent:
-/// identity = index. Set by mark_split_pinches (convert.h).
+/// one vertex in the file); every other vertex — including those a repair
+/// adds later, which get the property's default kOwnIdentity — is itself.
+/// Set by mark_split_pinches (convert.h); read through vertex_identity().
 inline constexpr const char* kVertexIdentity = "v:polyheal_identity";
-inline std::optional<Mesh::Property_map<vertex_descriptor, std::uint32_t>> vertex_identity_map(const Mesh& mesh) {
+inline constexpr std::uint32_t kOwnIdentity = 0xFFFFFFFFu;
+using VertexIdentityMap = Mesh::Property_map<vertex_descriptor, std::uint32_t>;
+inline std::optional<VertexIdentityMap> vertex_identity_map(const Mesh& mesh) {
   const auto [map, found] = mesh.property_map<vertex_descriptor, std::uint32_t>(kVertexIdentity);
   if (!found) return std::nullopt;
   return map;
+}
+/// The id under which the oracle compares v (shared vertex = same id).
+inline std::uint32_t vertex_identity(const std::optional<VertexIdentityMap>& map, vertex_descriptor v) {
+  const std::uint32_t i = map ? (*map)[v] : kOwnIdentity;
+  return i == kOwnIdentity ? static_cast<std::uint32_t>(v) : i;
 }
 
 /// p's coordinates as doubles, each within the lazy kernel's interval

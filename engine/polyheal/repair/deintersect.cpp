@@ -116,7 +116,7 @@ class Deintersector {
   Mesh& mesh_;
   Mesh::Property_map<vertex_descriptor, Point3d> original_;
   std::optional<Mesh::Property_map<vertex_descriptor, char>> pinned_;  // pinch-point copies: never moved
-  std::optional<Mesh::Property_map<vertex_descriptor, std::uint32_t>> identity_;  // pinch-point copies: one vertex
+  std::optional<VertexIdentityMap> identity_;  // pinch-point copies: one vertex
   const DeintersectOptions& o_;
   DeintersectReport& r_;
   LocalIndex index_;
@@ -376,10 +376,10 @@ class Deintersector {
   /// Does f have v as a corner — or another copy of v's pinch point (one
   /// vertex for the oracle, kVertexIdentity)?
   bool has_vertex(face_descriptor f, vertex_descriptor v) const {
-    const auto c = corners(f);
-    if (!identity_) return c[0] == v || c[1] == v || c[2] == v;
-    const std::uint32_t i = (*identity_)[v];
-    return (*identity_)[c[0]] == i || (*identity_)[c[1]] == i || (*identity_)[c[2]] == i;
+    const std::uint32_t i = vertex_identity(identity_, v);
+    for (vertex_descriptor c : corners(f))
+      if (vertex_identity(identity_, c) == i) return true;
+    return false;
   }
 
   Triangle triangle(face_descriptor f) const {
