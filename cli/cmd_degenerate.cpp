@@ -157,18 +157,14 @@ void add_degenerate(CLI::App& app, int& exit_code) {
     args->options.observer = &progress;
     args->options.certify = false;  // certified below, on the file as written
     DegenerateResult result = run_repair(*args, [&] { return remove_degenerate_faces(soup, args->options); });
-    const auto t1 = std::chrono::steady_clock::now();
-    progress.stage("writing and verifying");
-    const Soup written = write_and_read_back(result.soup, *args);
-    certify(soup, written, result.report);
-    result.report.seconds_certify = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-    const double write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-    progress.finish();
-    if (args->json)
-      std::cout << to_json(*args, result.report, read_s, write_s).dump(2) << "\n";
-    else
-      print_text(*args, result.report);
-    exit_code = result.report.certified ? kClean : kDefects;
+    DegenerateReport& r = result.report;
+    finish_repair(
+        result.soup, *args, progress, r.seconds_certify,
+        [&](const Soup& written) {
+          certify(soup, written, r);
+          return r.certified;
+        },
+        [&] { return to_json(*args, r, read_s, r.seconds_certify); }, [&] { print_text(*args, r); }, exit_code);
   });
 }
 

@@ -16,4 +16,7 @@ void add_degenerate(CLI::App& app, int& exit_code);
 /// Adds `deintersect` (Yamakawa & Shimada self-intersection removal).
 void add_deintersect(CLI::App& app, int& exit_code);
 
+/// Adds `regularize` (Jung, Shin & Choi valid-region growing).
+void add_regularize(CLI::App& app, int& exit_code);
+
 }  // namespace polyheal::cli

@@ -5,9 +5,11 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <iostream>
 #include <stdexcept>
 #include <string>
 
+#include "commands.h"
 #include "polyheal/io/read.h"
 #include "polyheal/io/write.h"
 #include "polyheal/mesh/errors.h"
@@ -82,6 +84,27 @@ inline Soup write_and_read_back(const Soup& soup, const RepairFiles& f, bool rep
   wo.allow_overwrite = f.overwrite || replace_own;
   write_soup(soup, f.output, wo);
   return read_soup(f.output);
+}
+
+
+/// The last stage of a repair command: writes `soup`, reads the file back,
+/// `certify(written)` (returns whether it is certified), then prints the
+/// report — `json()` (an nlohmann::json) with --json, else `text()` — and
+/// sets the exit code. `seconds` receives the write-and-verify time.
+template <class Certify, class Json, class Text>
+void finish_repair(const Soup& soup, const RepairFiles& f, TtyProgress& progress, double& seconds, Certify certify,
+                   Json json, Text text, int& exit_code) {
+  const auto t0 = std::chrono::steady_clock::now();
+  progress.stage("writing and verifying");
+  const Soup written = write_and_read_back(soup, f);
+  const bool certified = certify(written);
+  seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  progress.finish();
+  if (f.json)
+    std::cout << json().dump(2) << "\n";
+  else
+    text();
+  exit_code = certified ? kClean : kDefects;
 }
 
 }  // namespace polyheal::cli

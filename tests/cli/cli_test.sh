@@ -82,5 +82,26 @@ expect 2 "deintersect malformed input" -- "$bin" deintersect "$tmp/bad.off" -o "
 expect 2 "deintersect never writes over its input" -- "$bin" deintersect "$tmp/tube_out.off" -o "$tmp/tube_out.off" --overwrite
 expect 0 "deintersect help" -- "$bin" deintersect --help
 grep_out "Exit 0 when the written file has no self-intersection" "$tmp/out" "deintersect help explains exit codes"
+# polyheal regularize
+expect 0 "regularize resolves the overlapping spheres" -- "$bin" regularize "$src/fixtures/spheres_intersecting.off" -o "$tmp/sph_union.off"
+grep_out "CERTIFIED: closed, 2-manifold" "$tmp/out" "regularize verdict printed"
+grep_out "88 partially valid" "$tmp/out" "regularize reports the triangle groups"
+expect 0 "regularize output checks clean" -- "$bin" check "$tmp/sph_union.off"
+expect 0 "regularize --json" -- "$bin" regularize --json "$src/fixtures/knot_tube_r1.2.off" -o "$tmp/knot.stl"
+grep_out '"schema": "polyheal.regularize/1"' "$tmp/out" "regularize json schema tag"
+grep_out '"partially_valid"' "$tmp/out" "regularize json triangle groups"
+grep_out '"peak_memory_mb"' "$tmp/out" "regularize json peak memory"
+expect 0 "regularize stl output checks clean" -- "$bin" check "$tmp/knot.stl"
+expect 2 "regularize refuses zero-area faces" -- "$bin" regularize "$tmp/tjunction.off" -o "$tmp/z.off"
+grep_out "zero-area faces" "$tmp/err" "regularize says to remove zero-area faces first"
+printf 'OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 2 3\n' > "$tmp/open.off"
+expect 2 "regularize refuses an open mesh" -- "$bin" regularize "$tmp/open.off" -o "$tmp/z.off"
+grep_out "open.off: not closed" "$tmp/err" "regularize names the file and the reason"
+[ "$(wc -l < "$tmp/err")" -eq 1 ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: regularize error is not one line"; }
+[ ! -e "$tmp/z.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: regularize wrote output on error"; }
+expect 2 "regularize malformed input" -- "$bin" regularize "$tmp/bad.off" -o "$tmp/z.off"
+expect 2 "regularize never writes over its input" -- "$bin" regularize "$tmp/sph_union.off" -o "$tmp/sph_union.off" --overwrite
+expect 0 "regularize help" -- "$bin" regularize --help
+grep_out "winding number >= 1" "$tmp/out" "regularize help explains what is kept"
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -21,21 +21,6 @@ std::string faces_of(const Edge& e) {
 }
 std::string edge_name(const Edge& e) { return "edge (" + std::to_string(e.a) + ", " + std::to_string(e.b) + ")"; }
 
-/// The double nearest to the exact value of x (ties to even). CGAL::to_double
-/// on a lazy number is only guaranteed to a relative precision of 1e-5.
-double nearest_double(const Kernel::FT& x) {
-  const auto& e = x.exact();
-  const std::pair<double, double> iv = CGAL::to_interval(e);  // tight: equal or adjacent doubles
-  if (iv.first == iv.second) return iv.first;
-  using ET = std::decay_t<decltype(e)>;
-  const ET mid = (ET(iv.first) + ET(iv.second)) / 2;
-  if (e < mid) return iv.first;
-  if (mid < e) return iv.second;
-  std::uint64_t bits;
-  std::memcpy(&bits, &iv.first, sizeof bits);
-  return (bits & 1) == 0 ? iv.first : iv.second;
-}
-
 }  // namespace
 
 namespace {
@@ -192,7 +177,7 @@ Soup mesh_to_soup(const Mesh& mesh) {
   for (vertex_descriptor v : mesh.vertices()) {
     id[static_cast<std::uint32_t>(v)] = static_cast<Index>(s.points.size());
     const Point& p = mesh.point(v);
-    s.points.push_back({nearest_double(p.x()), nearest_double(p.y()), nearest_double(p.z())});
+    s.points.push_back(nearest_point3d(p));
   }
   for (face_descriptor f : mesh.faces()) {
     std::vector<Index> face;
@@ -201,5 +186,22 @@ Soup mesh_to_soup(const Mesh& mesh) {
   }
   return s;
 }
+
+// CGAL::to_double on a lazy number is only guaranteed to a relative
+// precision of 1e-5; this is the nearest double.
+double nearest_double(const Kernel::FT& x) {
+  const auto& e = x.exact();
+  const std::pair<double, double> iv = CGAL::to_interval(e);  // tight: equal or adjacent doubles
+  if (iv.first == iv.second) return iv.first;
+  using ET = std::decay_t<decltype(e)>;
+  const ET mid = (ET(iv.first) + ET(iv.second)) / 2;
+  if (e < mid) return iv.first;
+  if (mid < e) return iv.second;
+  std::uint64_t bits;
+  std::memcpy(&bits, &iv.first, sizeof bits);
+  return (bits & 1) == 0 ? iv.first : iv.second;
+}
+
+Point3d nearest_point3d(const Point& p) { return {nearest_double(p.x()), nearest_double(p.y()), nearest_double(p.z())}; }
 
 }  // namespace polyheal

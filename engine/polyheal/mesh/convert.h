@@ -35,6 +35,11 @@ MeshBuildResult soup_to_mesh_splitting_pinches(const Soup& soup, Mesh& mesh, std
 /// nothing when no point was split.
 void mark_split_pinches(Mesh& mesh);
 
+/// p with each exact coordinate rounded to the nearest double (ties to even).
+Point3d nearest_point3d(const Point& p);
+/// One exact number rounded to the nearest double (ties to even).
+double nearest_double(const Kernel::FT& x);
+
 /// The mesh as a soup, each exact coordinate rounded to the nearest double
 /// (ties to even; certify after rounding: check the result, not the mesh).
 /// Vertices are renumbered densely.

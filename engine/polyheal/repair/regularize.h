@@ -1,0 +1,122 @@
+// polyheal — regularizing a self-overlapping closed mesh: Jung, Shin & Choi,
+// "Self-intersection Removal in Triangular Mesh Offsetting" (CAD&A 2004).
+//
+// `polyheal regularize`, stage by stage (the paper's Fig. 3):
+//   1. detect     the input must be a closed, consistently oriented triangle
+//                 mesh (several components, overlapping each other, are the
+//                 point). Exactly zero-area faces are refused (§3.1: run
+//                 `polyheal degenerate` first). Which faces intersect is
+//                 decided by the oracle's global pass (exact predicates on the
+//                 doubles, cheap); the intersection *segments* are constructed
+//                 lazily (below).
+//   2. grow       the valid region (§3.4) from seed triangles (§3.3) through
+//                 intersection-free neighbours. A partially valid triangle is
+//                 sub-triangulated when the wave front reaches it (§3.5): its
+//                 intersection segments with every triangle it meets are
+//                 constructed exactly (Epeck), and a constrained Delaunay
+//                 triangulation in its own plane (dropping the dominant normal
+//                 axis, an exact projection) splits its edges at the segments'
+//                 ends and the segments at their mutual crossings. The wave
+//                 crosses the river (§3.6) into the counterpart's sub-triangles.
+//   3. stitch     the valid triangles and sub-triangles, with the points where
+//                 intersection curves meet merged by exact equality (§3.7).
+//   4. certify    the file as written (doubles) is checked exactly.
+//
+// Where the paper is generalised (its §5 open problems):
+// - Seeds. The paper takes a valid triangle touching the bounding box, which
+//   gives one seed for one outward offset. Here any unclassified triangle or
+//   sub-triangle can be a seed: its winding number is decided exactly by
+//   casting a line along the dominant axis of its normal through a point of
+//   it with double coordinates and signing the crossings with the input
+//   triangles (a line through an edge or a vertex is replaced by another).
+//   A (sub-)triangle is valid when the winding number on its outer side is 0
+//   (and so 1 on its inner side): the output bounds { winding >= 1 }, the
+//   union of the solids the input encloses. So every component gets a seed,
+//   components inside another are removed (reported), and cavities (inward
+//   facing shells inside a solid) are kept. An invalid seed's
+//   intersection-free neighbourhood is marked invalid without sub-triangulation.
+// - Crossing the river (§3.6: "by considering the normal orientation
+//   compatibility"). At an edge where more than two (sub-)triangles meet,
+//   they are sorted around the edge exactly, and the wave leaving a valid one
+//   rotates from it through its outer side, tracking the winding number of
+//   each wedge; the continuation is the first (sub-)triangle it meets that
+//   separates a wedge of winding <= 0 from one of winding >= 1 and faces the
+//   first. In the paper's case (two triangles crossing) this is the
+//   orientation-compatible sub-triangle of the counterpart.
+// - Laziness (§5 suggestion). Segments and sub-triangulations are computed
+//   only for triangles the wave front reaches and the triangles they touch.
+//
+// Not handled (refused with the face ids): coplanar overlapping faces.
+//
+// Rounding (ARCHITECTURE.md, certify after rounding): input vertices keep
+// their doubles bit for bit; points on intersection curves are exact and are
+// rounded to the nearest double on output. The written file is read back and
+// certified. A self-intersection that rounding re-created is repaired before
+// that with the local operations of `deintersect` (vertex moves in doubles);
+// what is still left is reported, with exit code 1.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "polyheal/inspect/report.h"
+#include "polyheal/mesh/soup.h"
+#include "polyheal/observer.h"
+
+namespace polyheal {
+
+struct RegularizeOptions {
+  bool certify = true;  // certify the rounded result (callers that certify the written file say false)
+  Observer* observer = nullptr;
+};
+
+struct RegularizeReport {
+  // input
+  std::size_t faces = 0, vertices = 0, components_in = 0;
+  std::size_t intersecting_pairs_in = 0, intersecting_faces_in = 0;
+  double bbox_diagonal = 0;
+  // growing (the paper's Table 1 and Fig. 2 groups, counted over input triangles)
+  std::size_t segments = 0;            // intersection segments constructed (pairs, exactly)
+  std::size_t triangles_split = 0;     // triangles sub-triangulated (lazily)
+  std::size_t sub_triangles = 0;       // sub-triangles they were split into
+  std::size_t valid = 0, partially_valid = 0, invalid = 0;
+  std::size_t seeds = 0, line_casts = 0;  // seeds tried (valid or not), winding-number lines cast
+  std::size_t unclassified = 0;        // (sub-)triangles no line could classify (reported, not output)
+  std::size_t orientation_conflicts = 0;  // river crossings that found no compatible continuation
+  std::size_t components_removed = 0;  // input components with no face in the output (enclosed or inverted)
+  // output
+  std::size_t faces_out = 0, vertices_out = 0, new_vertices = 0;
+  std::size_t faces_kept = 0;          // output faces that are input faces, bit for bit
+  double seconds_detect = 0, seconds_intersections = 0, seconds_grow = 0, seconds_stitch = 0,
+         seconds_certify = 0;
+  std::size_t rounding_pairs = 0;      // intersecting pairs rounding created (before their repair)
+  std::size_t rounding_moves = 0;      // vertices deintersect moved to repair them
+  // certificate, on the soup as written (certify())
+  Report out;                          // the exact inspection of the written file
+  double max_distance_to_input = 0;    // output -> input (each output triangle to the input triangle it lies on)
+  double hausdorff = 0, hausdorff_error_bound = 0;  // symmetric, to the input (-1: not measured)
+  bool certified = false;              // out.certified_clean()
+};
+
+struct RegularizeResult {
+  Soup soup;
+  RegularizeReport report;
+  /// Per output face, the input face it lies on (provenance).
+  std::vector<std::size_t> source_face;
+};
+
+/// Stages 1-3, the repair of what rounding broke, and, with
+/// options.certify, stage 4 on the rounded result. Throws UnsupportedInput
+/// for an input that is not a closed, consistently oriented triangle mesh,
+/// has zero-area faces, encloses negative volume, or has coplanar overlapping
+/// faces.
+RegularizeResult regularize(const Soup& input, const RegularizeOptions& options = {});
+
+/// Stage 4 on `written` (the output as read back; `input` as given): fills the
+/// certificate half of `report` (out, distances, certified). `source_face`
+/// is RegularizeResult::source_face.
+void certify(const Soup& input, const Soup& written, const std::vector<std::size_t>& source_face,
+             RegularizeReport& report);
+
+}  // namespace polyheal
