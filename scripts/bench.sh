@@ -1,24 +1,33 @@
 #!/usr/bin/env bash
-# Benchmarks `polyheal check` against CGAL's PMP::IO::read_polygon_mesh +
-# PMP::self_intersections (Epick, sequential and parallel) on the same files,
-# in one run, and rewrites the table in BENCHMARKS.md.
+# Benchmarks each polyheal command against its CGAL peer on the same files, in
+# one run, and rewrites the tables in BENCHMARKS.md: check (vs read_polygon_mesh
+# + self_intersections), degenerate, deintersect, regularize (vs the
+# PMP::experimental repair functions).
 #
-#   scripts/bench.sh            # all inputs, including a generated 1M-face torus-knot tube
-#   BENCH_RUNS=5 scripts/bench.sh
+#   scripts/bench.sh                               # every section
+#   BENCH_ONLY=regularize,deintersect scripts/bench.sh   # those sections; the others are kept as they are
+#   BENCH_RUNS=5 scripts/bench.sh                  # best of 5 in the check section
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/setup.sh"
 command -v /usr/bin/time >/dev/null || { sudo=""; [ "$(id -u)" -ne 0 ] && sudo=sudo; $sudo apt-get install -y -qq time; }
-"$root/scripts/build.sh" --target polyheal polyheal_gen cgal_check_peer cgal_degenerate_peer cgal_deintersect_peer >/dev/null
+"$root/scripts/build.sh" --target polyheal polyheal_gen cgal_check_peer cgal_degenerate_peer cgal_deintersect_peer \
+  cgal_regularize_peer >/dev/null
 b="$root/build"; work="$b/bench"; mkdir -p "$work"
 runs=${BENCH_RUNS:-3}
-knot="$work/torus_knot_1M.off"
-[ -f "$knot" ] || "$b/polyheal_gen" torus-knot --faces 1000000 "$knot" >/dev/null
+only=${BENCH_ONLY:-all}
+want() { [ "$only" = all ] || [[ ",$only," == *",$1,"* ]]; }
 corpus="$root/../shared/corpus"
-inputs=("$knot")
-for f in vhacd__Hand1.off cgal__bunny00.off vhacd__crank.off trimesh__cycloidal.ply; do
-  [ -f "$corpus/$f" ] && inputs+=("$corpus/$f")
-done
+json_num() { sed -n "s/.*\"$1\": \([-0-9.e+]*\).*/\1/p" "$2" | head -1; }
+# tetgen_verdict FILE: "yes"/"no" when `tetgen -pYQ` (2 minutes at most) meshes
+# the file / does not; "—" when the file is not closed (TetGen needs a volume).
+tetgen_verdict() {
+  local closed
+  closed=$({ "$b/polyheal" check --json "$1" 2>/dev/null || true; } | sed -n 's/.*"closed": \(true\|false\).*/\1/p' | head -1)
+  [ "$closed" = true ] || { echo "—"; return; }
+  cp "$1" "$work/tetgen_probe.off"
+  if timeout 120 tetgen -pYQ "$work/tetgen_probe.off" >/dev/null 2>&1; then echo yes; else echo no; fi
+}
 
 # best_of CMD...: prints "seconds peakKiB" of the fastest of $runs runs, or
 # "fails 0" when the command exits with 2 or more (the peer cannot read it).
@@ -34,143 +43,221 @@ best_of() {
   echo "$best $mem"
 }
 
+# --- polyheal check vs CGAL read + self_intersections ---
 rows=""
-for f in "${inputs[@]}"; do
-  name=$(basename "$f")
-  "$b/polyheal" check --json "$f" > "$work/check.json" || [ $? -eq 1 ]  # 1: defects found, fine here
-  faces=$(sed -n 's/.*"faces": \([0-9]*\).*/\1/p' "$work/check.json" | head -1)
-  pairs=$(sed -n 's/.*"self_intersecting_pairs": \([0-9]*\).*/\1/p' "$work/check.json" | head -1)
-  read -r ph_par ph_par_mem < <(best_of "$b/polyheal" check "$f")
-  read -r ph_seq ph_seq_mem < <(best_of "$b/polyheal" check --sequential "$f")
-  read -r cg_seq cg_seq_mem < <(best_of "$b/cgal_check_peer" "$f")
-  cg_seq_split=$(cat "$work/out.txt")
-  read -r cg_par cg_par_mem < <(best_of "$b/cgal_check_peer" "$f" --parallel)
-  cg_par_split=$(cat "$work/out.txt")
-  if [ "$cg_par" = fails ]; then
-    rows+="| $name | $faces | $pairs / — | $ph_par s, $((ph_par_mem / 1024)) MB | $ph_seq s | cannot read it | cannot read it | — |"$'\n'
-  else
-    cg_pairs=${cg_par_split##* }
-    ratio=$(awk "BEGIN{b = $cg_seq < $cg_par ? $cg_seq : $cg_par; printf \"%.1fx\", b / $ph_par}")
-    rows+="| $name | $faces | $pairs / $cg_pairs | $ph_par s, $((ph_par_mem / 1024)) MB | $ph_seq s | $cg_seq s (read ${cg_seq_split%% *} s) | $cg_par s, $((cg_par_mem / 1024)) MB | $ratio |"$'\n'
-  fi
-  echo "$name: polyheal $ph_par s (seq $ph_seq s), CGAL $cg_par s (seq $cg_seq s)" >&2
-done
+if want check; then
+  knot="$work/torus_knot_1M.off"
+  [ -f "$knot" ] || "$b/polyheal_gen" torus-knot --faces 1000000 "$knot" >/dev/null
+  inputs=("$knot")
+  for f in vhacd__Hand1.off cgal__bunny00.off vhacd__crank.off trimesh__cycloidal.ply; do
+    [ -f "$corpus/$f" ] && inputs+=("$corpus/$f")
+  done
+
+  for f in "${inputs[@]}"; do
+    name=$(basename "$f")
+    "$b/polyheal" check --json "$f" > "$work/check.json" || [ $? -eq 1 ]  # 1: defects found, fine here
+    faces=$(sed -n 's/.*"faces": \([0-9]*\).*/\1/p' "$work/check.json" | head -1)
+    pairs=$(sed -n 's/.*"self_intersecting_pairs": \([0-9]*\).*/\1/p' "$work/check.json" | head -1)
+    read -r ph_par ph_par_mem < <(best_of "$b/polyheal" check "$f")
+    read -r ph_seq ph_seq_mem < <(best_of "$b/polyheal" check --sequential "$f")
+    read -r cg_seq cg_seq_mem < <(best_of "$b/cgal_check_peer" "$f")
+    cg_seq_split=$(cat "$work/out.txt")
+    read -r cg_par cg_par_mem < <(best_of "$b/cgal_check_peer" "$f" --parallel)
+    cg_par_split=$(cat "$work/out.txt")
+    if [ "$cg_par" = fails ]; then
+      rows+="| $name | $faces | $pairs / — | $ph_par s, $((ph_par_mem / 1024)) MB | $ph_seq s | cannot read it | cannot read it | — |"$'\n'
+    else
+      cg_pairs=${cg_par_split##* }
+      ratio=$(awk "BEGIN{b = $cg_seq < $cg_par ? $cg_seq : $cg_par; printf \"%.1fx\", b / $ph_par}")
+      rows+="| $name | $faces | $pairs / $cg_pairs | $ph_par s, $((ph_par_mem / 1024)) MB | $ph_seq s | $cg_seq s (read ${cg_seq_split%% *} s) | $cg_par s, $((cg_par_mem / 1024)) MB | $ratio |"$'\n'
+    fi
+    echo "$name: polyheal $ph_par s (seq $ph_seq s), CGAL $cg_par s (seq $cg_seq s)" >&2
+  done
+fi
 
 # --- polyheal degenerate vs PMP::experimental::remove_almost_degenerate_faces (one run each: slow) ---
-json_num() { sed -n "s/.*\"$1\": \([-0-9.e+]*\).*/\1/p" "$2" | head -1; }
-deg_inputs=("$root/fixtures/cad_cylinder.off" "$root/fixtures/tube_edge2.42.off" "$root/fixtures/anchor.off"
-            "$root/fixtures/thingi10k_65004.stl")
-for f in cgal__joint.off trimesh__round.stl cgal__pinion.off cgal__handle.off; do
-  [ -f "$corpus/$f" ] && deg_inputs+=("$corpus/$f")
-done
 deg_rows=""
-for f in "${deg_inputs[@]}"; do
-  name=$(basename "$f")
-  code=0
-  /usr/bin/time -f "%e %M" -o "$work/time.txt" "$b/polyheal" degenerate --json --overwrite "$f" -o "$work/deg_ours.off" \
-    > "$work/deg.json" 2>/dev/null || code=$?
-  read -r ours_s ours_kb < <(tail -n 1 "$work/time.txt")
-  if [ "$code" -ge 2 ]; then deg_rows+="| $name | — | — | error | | | | | | |"$'\n'; continue; fi
-  faces_in=$(sed -n '/"faces"/,/}/p' "$work/deg.json" | json_num input /dev/stdin)
-  caps_in=$(sed -n '/"before"/,/}/p' "$work/deg.json" | json_num caps /dev/stdin)
-  needles_in=$(sed -n '/"before"/,/}/p' "$work/deg.json" | json_num needles /dev/stdin)
-  left=$(sed -n '/"after"/,/}/p' "$work/deg.json" | awk -F': ' '/caps|needles|zero_area/{gsub(",","",$2); s+=$2} END{print s}')
-  faces_out=$(sed -n '/"faces"/,/}/p' "$work/deg.json" | json_num output /dev/stdin)
-  h_rel=$(json_num hausdorff_relative "$work/deg.json")
-  certified=$(sed -n 's/.*"certified": \(true\|false\).*/\1/p' "$work/deg.json" | head -1)
-  peer_row="cannot read it | | | "
-  if timeout 1200 "$b/cgal_degenerate_peer" "$f" "$work/deg_cgal.off" > "$work/peer.txt" 2>/dev/null; then
-    read -r cg_s cg_faces cg_h cg_diag < "$work/peer.txt"
-    "$b/polyheal" check --json "$work/deg_cgal.off" > "$work/peer.json" || true
-    cg_left=$(awk -F': ' '/"degenerate_faces"|"caps"|"needles"/{gsub(",","",$2); s+=$2} END{print s}' "$work/peer.json")
-    cg_hrel=$(awk "BEGIN{printf \"%.2g\", $cg_h / $cg_diag}")
-    peer_row="$cg_left | $cg_faces | $cg_hrel | $cg_s s"
-  fi
-  deg_rows+="| $name | $faces_in | $caps_in / $needles_in | $left | $faces_out | $(awk "BEGIN{printf \"%.2g\", $h_rel}") | $ours_s s, $((ours_kb / 1024)) MB | $certified | $peer_row |"$'\n'
-  echo "$name: polyheal degenerate $ours_s s, $left left; CGAL ${cg_s:-?} s" >&2
-done
+if want degenerate; then
+  deg_inputs=("$root/fixtures/cad_cylinder.off" "$root/fixtures/tube_edge2.42.off" "$root/fixtures/anchor.off"
+              "$root/fixtures/thingi10k_65004.stl")
+  for f in cgal__joint.off trimesh__round.stl cgal__pinion.off cgal__handle.off; do
+    [ -f "$corpus/$f" ] && deg_inputs+=("$corpus/$f")
+  done
+  for f in "${deg_inputs[@]}"; do
+    name=$(basename "$f")
+    code=0
+    /usr/bin/time -f "%e %M" -o "$work/time.txt" "$b/polyheal" degenerate --json --overwrite "$f" -o "$work/deg_ours.off" \
+      > "$work/deg.json" 2>/dev/null || code=$?
+    read -r ours_s ours_kb < <(tail -n 1 "$work/time.txt")
+    if [ "$code" -ge 2 ]; then deg_rows+="| $name | — | — | error | | | | | | |"$'\n'; continue; fi
+    faces_in=$(sed -n '/"faces"/,/}/p' "$work/deg.json" | json_num input /dev/stdin)
+    caps_in=$(sed -n '/"before"/,/}/p' "$work/deg.json" | json_num caps /dev/stdin)
+    needles_in=$(sed -n '/"before"/,/}/p' "$work/deg.json" | json_num needles /dev/stdin)
+    left=$(sed -n '/"after"/,/}/p' "$work/deg.json" | awk -F': ' '/caps|needles|zero_area/{gsub(",","",$2); s+=$2} END{print s}')
+    faces_out=$(sed -n '/"faces"/,/}/p' "$work/deg.json" | json_num output /dev/stdin)
+    h_rel=$(json_num hausdorff_relative "$work/deg.json")
+    certified=$(sed -n 's/.*"certified": \(true\|false\).*/\1/p' "$work/deg.json" | head -1)
+    peer_row="cannot read it | | | "
+    if timeout 1200 "$b/cgal_degenerate_peer" "$f" "$work/deg_cgal.off" > "$work/peer.txt" 2>/dev/null; then
+      read -r cg_s cg_faces cg_h cg_diag < "$work/peer.txt"
+      "$b/polyheal" check --json "$work/deg_cgal.off" > "$work/peer.json" || true
+      cg_left=$(awk -F': ' '/"degenerate_faces"|"caps"|"needles"/{gsub(",","",$2); s+=$2} END{print s}' "$work/peer.json")
+      cg_hrel=$(awk "BEGIN{printf \"%.2g\", $cg_h / $cg_diag}")
+      peer_row="$cg_left | $cg_faces | $cg_hrel | $cg_s s"
+    fi
+    deg_rows+="| $name | $faces_in | $caps_in / $needles_in | $left | $faces_out | $(awk "BEGIN{printf \"%.2g\", $h_rel}") | $ours_s s, $((ours_kb / 1024)) MB | $certified | $peer_row |"$'\n'
+    echo "$name: polyheal degenerate $ours_s s, $left left; CGAL ${cg_s:-?} s" >&2
+  done
+fi
+
 
 # --- polyheal deintersect vs PMP::experimental::remove_self_intersections (one run each) ---
-# Generated narrow-clearance cases (thin-walled tube, radii 5.0 / 4.8: wall
-# clearance 0.2), the 100k-face narrow-clearance scene, and every corpus mesh
-# with an exact self-intersection. Both outputs are judged by `polyheal check`
-# on the written file.
-di_inputs=()
-for e in 3.0 3.3 3.5 3.8 4.0 4.5; do
-  "$b/polyheal_gen" tube --edge "$e" "$work/tube_edge$e.off" >/dev/null
-  di_inputs+=("$work/tube_edge$e.off")
-done
-di_inputs+=("$root/fixtures/tube_edge2.42_offset-0.15.off")
-"$b/polyheal_gen" narrow-clearance --faces 100000 --tubes 5 "$work/narrow_clearance_100k.off" >/dev/null
-di_inputs+=("$work/narrow_clearance_100k.off")
-while IFS= read -r f; do di_inputs+=("$corpus/$f"); done < <(awk -F'\t' 'NR > 1 && $11 > 0 {print $1}' "$corpus/MANIFEST.tsv")
-# tetgen_verdict FILE: "yes"/"no" when `tetgen -pYQ` (2 minutes at most) meshes
-# the file / does not; "—" when the file is not closed (TetGen needs a volume).
-tetgen_verdict() {
-  local closed
-  closed=$({ "$b/polyheal" check --json "$1" 2>/dev/null || true; } | sed -n 's/.*"closed": \(true\|false\).*/\1/p' | head -1)
-  [ "$closed" = true ] || { echo "—"; return; }
-  cp "$1" "$work/tetgen_probe.off"
-  if timeout 120 tetgen -pYQ "$work/tetgen_probe.off" >/dev/null 2>&1; then echo yes; else echo no; fi
-}
 di_rows=""; di_corpus=0; di_ours=0; di_cgal=0; di_ours_faithful=0; di_cgal_faithful=0
-for f in "${di_inputs[@]}"; do
-  [ -f "$f" ] || continue
-  name=$(basename "$f")
-  code=0
-  /usr/bin/time -f "%e %M" -o "$work/time.txt" timeout 1200 "$b/polyheal" deintersect --json --overwrite "$f" \
-    -o "$work/di_ours.off" > "$work/di.json" 2>"$work/di.err" || code=$?
-  read -r ours_s ours_kb < <(tail -n 1 "$work/time.txt")
-  faces=$({ "$b/polyheal" check --json "$f" 2>/dev/null || true; } | sed -n 's/.*"faces": \([0-9]*\).*/\1/p' | head -1)
-  if [ "$code" -ge 2 ]; then
-    why=$(sed -n 's/.*is non-manifold: shared by.*/an edge with 3+ faces/p; s/.*repeats a vertex.*/a face repeating a vertex/p;
-                 s/.*polygons with more than 3 corners.*/polygons/p; s/.*disagree in orientation.*/misoriented faces/p' "$work/di.err" | head -1)
-    ours="| — | refused: ${why:-see polyheal check} | | | | "
-    in_faces="—"; ours_ok=0; ours_faithful=0
-  else
-    in_faces=$(sed -n '/"intersecting_faces"/,/}/p' "$work/di.json" | json_num input /dev/stdin)
-    left=$(sed -n '/"intersecting_faces"/,/}/p' "$work/di.json" | json_num output /dev/stdin)
-    move=$(json_num max_vertex_displacement "$work/di.json")
-    move_rel=$(json_num max_vertex_displacement_relative "$work/di.json")
-    h_rel=$(json_num hausdorff_relative "$work/di.json")
-    changed=$(json_num faces_changed "$work/di.json")
-    ours="| $left | $(awk "BEGIN{printf \"%.3g (%.2g%%)\", $move, 100 * $move_rel}") | $(awk "BEGIN{printf \"%.2g%%\", 100 * $h_rel}") | $changed | $ours_s s, $((ours_kb / 1024)) MB | $(tetgen_verdict "$work/di_ours.off") "
-    ours_ok=$([ "$left" = 0 ] && echo 1 || echo 0)
-    ours_faithful=$(awk "BEGIN{print ($ours_ok && $h_rel <= 0.01) ? 1 : 0}")
-  fi
-  peer="| crashed or timed out | | | | "; cgal_ok=0; cgal_faithful=0
-  if timeout 1200 "$b/cgal_deintersect_peer" "$f" "$work/di_cgal.off" > "$work/peer.txt" 2>/dev/null; then
-    read -r cg_s cg_faces cg_still cg_h cg_diag cg_ok < "$work/peer.txt"
-    cg_pairs=$({ "$b/polyheal" check --json "$work/di_cgal.off" 2>/dev/null || true; } | sed -n 's/.*"self_intersecting_pairs": \([0-9]*\).*/\1/p' | head -1)
-    cg_hrel=$(awk "BEGIN{printf \"%.2g\", ($cg_diag > 0 ? $cg_h / $cg_diag : 0)}")
-    peer="| ${cg_pairs:-?} | $cg_faces | $(awk "BEGIN{printf \"%.2g%%\", 100 * $cg_hrel}") | $cg_s s | $(tetgen_verdict "$work/di_cgal.off") "
-    cgal_ok=$([ "${cg_pairs:-1}" = 0 ] && echo 1 || echo 0)
-    cgal_faithful=$(awk "BEGIN{print ($cgal_ok && $cg_faces == ${faces:-0} && $cg_hrel <= 0.01) ? 1 : 0}")
-  fi
-  di_rows+="| $name | $faces | $in_faces $ours$peer|"$'\n'
-  case "$f" in "$corpus"/*)
-    di_corpus=$((di_corpus + 1)); di_ours=$((di_ours + ours_ok)); di_cgal=$((di_cgal + cgal_ok))
-    di_ours_faithful=$((di_ours_faithful + ours_faithful)); di_cgal_faithful=$((di_cgal_faithful + cgal_faithful)) ;;
-  esac
-  echo "$name: polyheal deintersect $ours_s s (exit $code); CGAL ${cg_s:-?} s" >&2
-done
+if want deintersect; then
+  # Generated narrow-clearance cases (thin-walled tube, radii 5.0 / 4.8: wall
+  # clearance 0.2), the 100k-face narrow-clearance scene, and every corpus mesh
+  # with an exact self-intersection. Both outputs are judged by `polyheal check`
+  # on the written file.
+  di_inputs=()
+  for e in 3.0 3.3 3.5 3.8 4.0 4.5; do
+    "$b/polyheal_gen" tube --edge "$e" "$work/tube_edge$e.off" >/dev/null
+    di_inputs+=("$work/tube_edge$e.off")
+  done
+  di_inputs+=("$root/fixtures/tube_edge2.42_offset-0.15.off")
+  "$b/polyheal_gen" narrow-clearance --faces 100000 --tubes 5 "$work/narrow_clearance_100k.off" >/dev/null
+  di_inputs+=("$work/narrow_clearance_100k.off")
+  while IFS= read -r f; do di_inputs+=("$corpus/$f"); done < <(awk -F'\t' 'NR > 1 && $11 > 0 {print $1}' "$corpus/MANIFEST.tsv")
+  for f in "${di_inputs[@]}"; do
+    [ -f "$f" ] || continue
+    name=$(basename "$f")
+    code=0
+    /usr/bin/time -f "%e %M" -o "$work/time.txt" timeout 1200 "$b/polyheal" deintersect --json --overwrite "$f" \
+      -o "$work/di_ours.off" > "$work/di.json" 2>"$work/di.err" || code=$?
+    read -r ours_s ours_kb < <(tail -n 1 "$work/time.txt")
+    faces=$({ "$b/polyheal" check --json "$f" 2>/dev/null || true; } | sed -n 's/.*"faces": \([0-9]*\).*/\1/p' | head -1)
+    if [ "$code" -ge 2 ]; then
+      why=$(sed -n 's/.*is non-manifold: shared by.*/an edge with 3+ faces/p; s/.*repeats a vertex.*/a face repeating a vertex/p;
+                   s/.*polygons with more than 3 corners.*/polygons/p; s/.*disagree in orientation.*/misoriented faces/p' "$work/di.err" | head -1)
+      ours="| — | refused: ${why:-see polyheal check} | | | | "
+      in_faces="—"; ours_ok=0; ours_faithful=0
+    else
+      in_faces=$(sed -n '/"intersecting_faces"/,/}/p' "$work/di.json" | json_num input /dev/stdin)
+      left=$(sed -n '/"intersecting_faces"/,/}/p' "$work/di.json" | json_num output /dev/stdin)
+      move=$(json_num max_vertex_displacement "$work/di.json")
+      move_rel=$(json_num max_vertex_displacement_relative "$work/di.json")
+      h_rel=$(json_num hausdorff_relative "$work/di.json")
+      changed=$(json_num faces_changed "$work/di.json")
+      ours="| $left | $(awk "BEGIN{printf \"%.3g (%.2g%%)\", $move, 100 * $move_rel}") | $(awk "BEGIN{printf \"%.2g%%\", 100 * $h_rel}") | $changed | $ours_s s, $((ours_kb / 1024)) MB | $(tetgen_verdict "$work/di_ours.off") "
+      ours_ok=$([ "$left" = 0 ] && echo 1 || echo 0)
+      ours_faithful=$(awk "BEGIN{print ($ours_ok && $h_rel <= 0.01) ? 1 : 0}")
+    fi
+    peer="| crashed or timed out | | | | "; cgal_ok=0; cgal_faithful=0
+    if timeout 1200 "$b/cgal_deintersect_peer" "$f" "$work/di_cgal.off" > "$work/peer.txt" 2>/dev/null; then
+      read -r cg_s cg_faces cg_still cg_h cg_diag cg_ok < "$work/peer.txt"
+      cg_pairs=$({ "$b/polyheal" check --json "$work/di_cgal.off" 2>/dev/null || true; } | sed -n 's/.*"self_intersecting_pairs": \([0-9]*\).*/\1/p' | head -1)
+      cg_hrel=$(awk "BEGIN{printf \"%.2g\", ($cg_diag > 0 ? $cg_h / $cg_diag : 0)}")
+      peer="| ${cg_pairs:-?} | $cg_faces | $(awk "BEGIN{printf \"%.2g%%\", 100 * $cg_hrel}") | $cg_s s | $(tetgen_verdict "$work/di_cgal.off") "
+      cgal_ok=$([ "${cg_pairs:-1}" = 0 ] && echo 1 || echo 0)
+      cgal_faithful=$(awk "BEGIN{print ($cgal_ok && $cg_faces == ${faces:-0} && $cg_hrel <= 0.01) ? 1 : 0}")
+    fi
+    di_rows+="| $name | $faces | $in_faces $ours$peer|"$'\n'
+    case "$f" in "$corpus"/*)
+      di_corpus=$((di_corpus + 1)); di_ours=$((di_ours + ours_ok)); di_cgal=$((di_cgal + cgal_ok))
+      di_ours_faithful=$((di_ours_faithful + ours_faithful)); di_cgal_faithful=$((di_cgal_faithful + cgal_faithful)) ;;
+    esac
+    echo "$name: polyheal deintersect $ours_s s (exit $code); CGAL ${cg_s:-?} s" >&2
+  done
+fi
 
+# --- polyheal regularize vs PMP::experimental::autorefine_and_remove_self_intersections (one run each) ---
+# verdict FILE: "certified" or the defects `polyheal check` finds in it.
+verdict() {
+  local j="$work/verdict.json"
+  { "$b/polyheal" check --json "$1" 2>/dev/null || true; } > "$j"
+  if grep -q '"certified_clean": true' "$j"; then echo certified; return; fi
+  [ -s "$j" ] || { echo "unreadable"; return; }
+  awk -F': ' '/"boundary_edges"|"nonmanifold_edges"|"nonmanifold_vertices"|"self_intersecting_pairs"|"degenerate_faces"/ {
+      gsub(/[ ",]/, "", $1); gsub(/[ ,]/, "", $2); if ($2 + 0 > 0) s = s (s ? ", " : "") $2 " " $1 }
+    END { print (s ? s : "not certified") }' "$j"
+}
+reg_rows=""; reg_count=0; reg_ours=0; reg_cgal=0
+if want regularize; then
+  reg_inputs=("$root/fixtures/spheres_intersecting.off" "$root/fixtures/bones.off" "$root/fixtures/knot_tube_r1.2.off")
+  for r in 0.9 1.2 1.6; do
+    "$b/polyheal_gen" torus-knot --faces 20000 --radius "$r" "$work/knot20k_r$r.off" >/dev/null
+    reg_inputs+=("$work/knot20k_r$r.off")
+  done
+  "$b/polyheal_gen" torus-knot --faces 200000 --radius 1.2 "$work/knot200k_r1.2.off" >/dev/null
+  reg_inputs+=("$work/knot200k_r1.2.off")
+  while IFS= read -r f; do reg_inputs+=("$corpus/$f"); done < <(awk -F'\t' 'NR > 1 && $11 > 0 && $16 == 0 {print $1}' "$corpus/MANIFEST.tsv")
+  for f in "${reg_inputs[@]}"; do
+    [ -f "$f" ] || continue
+    name=$(basename "$f")
+    reg_count=$((reg_count + 1))
+    code=0
+    /usr/bin/time -f "%e %M" -o "$work/time.txt" timeout 1200 "$b/polyheal" regularize --json --overwrite "$f" \
+      -o "$work/reg_ours.off" > "$work/reg.json" 2>"$work/reg.err" || code=$?
+    read -r ours_s ours_kb < <(tail -n 1 "$work/time.txt")
+    faces=$({ "$b/polyheal" check --json "$f" 2>/dev/null || true; } | sed -n 's/.*"faces": \([0-9]*\).*/\1/p' | head -1)
+    pairs=$({ "$b/polyheal" check --json "$f" 2>/dev/null || true; } | sed -n 's/.*"self_intersecting_pairs": \([0-9]*\).*/\1/p' | head -1)
+    if [ "$code" -ge 2 ]; then
+      why=$(sed "s|.*$name: ||" "$work/reg.err" | head -1 | cut -c1-100)
+      ours="refused: ${why:-error} | | | $ours_s s | —"
+      ours_vol=""
+    else
+      v=$(verdict "$work/reg_ours.off")
+      [ "$v" = certified ] && reg_ours=$((reg_ours + 1))
+      out_faces=$(sed -n '/"output_mesh"/,/}/p' "$work/reg.json" | json_num faces /dev/stdin)
+      kept=$(json_num faces_kept "$work/reg.json")
+      ours_vol=$(sed -n '/"output_mesh"/,/}/p' "$work/reg.json" | json_num volume /dev/stdin)
+      ours="$v | $out_faces | $kept | $ours_s s, $((ours_kb / 1024)) MB | $(tetgen_verdict "$work/reg_ours.off")"
+    fi
+    peer="crashed or timed out | | | |"
+    code=0
+    /usr/bin/time -f "%e %M" -o "$work/time.txt" timeout 1200 "$b/cgal_regularize_peer" "$f" "$work/reg_cgal.off" \
+      > "$work/peer.txt" 2>/dev/null || code=$?
+    if [ "$code" -eq 0 ]; then
+      read -r cg_s cg_faces cg_ok cg_still < "$work/peer.txt"
+      read -r cg_wall cg_kb < <(tail -n 1 "$work/time.txt")
+      cv=$(verdict "$work/reg_cgal.off")
+      [ "$cv" = certified ] && reg_cgal=$((reg_cgal + 1))
+      cg_vol=$({ "$b/polyheal" check --json "$work/reg_cgal.off" 2>/dev/null || true; } | json_num signed_volume /dev/stdin)
+      vol="—"
+      [ -n "$ours_vol" ] && [ -n "$cg_vol" ] && vol=$(awk "BEGIN{d = $ours_vol - $cg_vol; if (d < 0) d = -d; m = $cg_vol < 0 ? -$cg_vol : $cg_vol; printf \"%.6g (%.1g)\", $ours_vol, (m > 0 ? d / m : d)}")
+      peer="$cv | $cg_faces | $vol | $cg_wall s ($cg_s s), $((cg_kb / 1024)) MB | $(tetgen_verdict "$work/reg_cgal.off")"
+    fi
+    reg_rows+="| $name | $faces | $pairs | $ours | $peer |"$'\n'
+    echo "$name: polyheal regularize $ours_s s; CGAL ${cg_wall:-?} s" >&2
+  done
+fi
+
+run_line="Run: $(date -u +%Y-%m-%d), polyheal $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown), Release build."
+# old_section HEADING: that section of the current BENCHMARKS.md, as it stands (a section not rerun)
+old_section() {
+  [ -f "$root/BENCHMARKS.md" ] || return 0
+  awk -v h="$1" 'index($0, h) == 1 {on = 1; print; next} on && (/^## / || /^## Notes/) {exit} on {print}' "$root/BENCHMARKS.md"
+}
 machine="$(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores, $(free -g | awk '/Mem:/{print $2}') GiB"
 {
   cat <<HEAD
 # Benchmarks
 
-Produced by \`scripts/bench.sh\` (best of $runs runs each, wall time of the whole
-process, peak resident memory from \`/usr/bin/time\`). Do not edit by hand.
+Produced by \`scripts/bench.sh\` (wall time of the whole process, peak resident
+memory from \`/usr/bin/time\`). Do not edit by hand. \`BENCH_ONLY=section,...\` reruns
+some sections and keeps the others; each section names its own run.
 
 - Machine: $machine
-- Date: $(date -u +%Y-%m-%d)
-- polyheal: $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown), Release build
-- Peer: CGAL $(dpkg-query -W -f='${Version}' libcgal-dev) \`PMP::IO::read_polygon_mesh\` + \`PMP::self_intersections\`, Epick
-- Inputs: a generated 1M-face torus-knot tube (\`polyheal_gen torus-knot --faces 1000000\`, written as OFF), and the
-  largest corpus meshes (../shared/corpus).
+- Peers: CGAL $(dpkg-query -W -f='${Version}' libcgal-dev) (Debian), one peer per section, same machine, same run.
 
+HEAD
+  if want check; then
+  cat <<HEAD
 ## \`polyheal check\` vs CGAL read + self_intersections
+
+$run_line
+Best of $runs runs each. Peer: \`PMP::IO::read_polygon_mesh\` + \`PMP::self_intersections\`, Epick.
+Inputs: a generated 1M-face torus-knot tube (\`polyheal_gen torus-knot --faces 1000000\`, written as OFF), and the
+largest corpus meshes (../shared/corpus).
 
 polyheal's column is read + the full exact report (topology, degenerate/cap/needle
 classification, TetGen tolerances, every self-intersecting pair); CGAL's is read +
@@ -186,7 +273,15 @@ HEAD
 Target (issue 2): read + exact check of a 1M-face OFF in under 1 s on 2 cores,
 at least 4x faster than CGAL end to end, peak memory under 1 GB.
 
+TAIL
+  else old_section '## `polyheal check`'; fi
+  if want degenerate; then
+  cat <<'TAIL'
 ## `polyheal degenerate` vs CGAL `PMP::experimental::remove_almost_degenerate_faces`
+
+TAIL
+  echo "$run_line"
+  cat <<'TAIL'
 
 Same thresholds: caps above 175 deg, needles below 5 deg (for CGAL: longest/shortest
 edge above 1/sin 5 deg, its needle measure), tolerance 1 per mille of the bbox diagonal
@@ -205,7 +300,15 @@ Targets (issue 3): every cap and needle removed on every corpus CAD mesh within
 1 per mille; a 10k-face CAD mesh in under 0.5 s; a 500k-face mesh in under 30 s and
 4 GB; output face count within 1.5x of the input's.
 
+TAIL
+  else old_section '## `polyheal degenerate`'; fi
+  if want deintersect; then
+  cat <<'TAIL'
 ## `polyheal deintersect` vs CGAL `PMP::experimental::remove_self_intersections`
+
+TAIL
+  echo "$run_line"
+  cat <<'TAIL'
 
 Defaults on both sides (polyheal: clearance 2% of the lifted face's longest edge,
 no vertex moved further than 2% of the bbox diagonal; CGAL: local smoothing, then
@@ -236,7 +339,38 @@ Targets (issue 4): every generated narrow-clearance case repaired with max
 displacement at most twice the wall clearance; a 100k-face mesh with about 1%
 intersecting faces in under 5 s; the fraction of corpus self-intersecting meshes
 repaired strictly above CGAL's.
+
 TAIL
+  else old_section '## `polyheal deintersect`'; fi
+  if want regularize; then
+  cat <<'TAIL'
+## `polyheal regularize` vs CGAL `PMP::experimental::autorefine_and_remove_self_intersections`
+
+TAIL
+  echo "$run_line"
+  cat <<'TAIL'
+
+Closed meshes that overlap themselves or each other: the fixtures, generated
+torus-knot tubes whose radius makes them overlap (`polyheal_gen torus-knot --radius R`:
+0.9 overlaps where strands pass close, 1.2 and beyond also where the radius exceeds
+the curve's), and the corpus meshes with an exact self-intersection that are closed.
+"verdict": `polyheal check` on each written file (CERTIFIED CLEAN, or what is left).
+"kept": output faces that are input faces bit for bit. "volume": the enclosed volume
+of polyheal's output and its relative difference from CGAL's (both compute the union).
+Time and memory: the whole process for both (CGAL's peer: read, autorefine and remove,
+copy to doubles, write, its own self-intersection check; its function alone in brackets).
+"TetGen": does `tetgen -pYQ` mesh the output (— when not closed). One run each.
+
+| input | faces | pairs in | polyheal verdict | faces out | kept | polyheal time | TetGen | CGAL verdict | CGAL faces out | volume (rel. diff.) | CGAL time | TetGen on CGAL's |
+| --- | ---: | ---: | --- | ---: | ---: | ---: | --- | --- | ---: | ---: | ---: | --- |
+TAIL
+  printf "%s" "$reg_rows"
+  cat <<TAIL
+
+Inputs certified: polyheal $reg_ours of $reg_count, CGAL $reg_cgal of $reg_count.
+
+TAIL
+  else old_section '## `polyheal regularize`'; fi
 } > "$root/BENCHMARKS.md.new"
 if [ -f "$root/BENCHMARKS.md" ] && grep -q '^## Notes' "$root/BENCHMARKS.md"; then
   sed -n '/^## Notes/,$p' "$root/BENCHMARKS.md" | { echo; cat; } >> "$root/BENCHMARKS.md.new"

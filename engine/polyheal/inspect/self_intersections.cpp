@@ -145,6 +145,14 @@ void scan(const Soup& s, const SelfIntersectionOptions& o, Found found, const st
                                              exact_triangle(s, b, degenerate[y.info()])))
       found(a.face, b.face);
   };
+  if (o.only) {
+    std::vector<const Box*> flagged;
+    for (const Box* b : pointers)
+      if ((*o.only)[tris[b->info()].face]) flagged.push_back(b);
+    CGAL::box_intersection_d<CGAL::Sequential_tag>(flagged.begin(), flagged.end(), pointers.begin(), pointers.end(),
+                                                   callback, Traits(), kCutoff);
+    return;
+  }
   box_pairs(pointers, callback, o.parallel ? 2 : 0);  // 2 levels: 4 leaves, enough to balance 2 cores
 }
 

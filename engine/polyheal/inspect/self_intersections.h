@@ -23,6 +23,9 @@ struct FacePair {
 
 struct SelfIntersectionOptions {
   bool parallel = true;           // TBB broad + narrow phase (2 cores: measured ~1.7x, BENCHMARKS.md)
+  /// When set (one flag per face): only pairs with at least one flagged
+  /// face — the check of an edit that changed those faces.
+  const std::vector<char>* only = nullptr;
   Observer* observer = nullptr;
 };
 

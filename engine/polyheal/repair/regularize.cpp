@@ -66,10 +66,12 @@ enum State : char { kUnvisited = 0, kValid = 1, kInvalid = 2 };
 /// A triangle of the arrangement being classified: an input triangle, or one
 /// of the sub-triangles a partially valid triangle is split into (§3.5).
 struct Piece {
-  std::array<Index, 3> v;  // global vertex ids, oriented like the source triangle
-  Index source;            // input face it lies in
+  std::array<Index, 3> v;  // global vertex ids, oriented like the sheets it stands for
+  Index source;            // an input face it lies in (and is oriented like)
+  int weight = 1;          // coincident sheets it stands for (coplanar overlaps: net count)
   bool alive = true;       // false once the input triangle is split
   State state = kUnvisited;
+  int front = 0;           // winding number on its outer side, once classified
 };
 
 /// The coordinate axes (i, j) that remain when axis k is dropped, in cyclic
@@ -81,30 +83,36 @@ class Regularizer {
  public:
   Regularizer(const Soup& soup, const std::vector<FacePair>& pairs, const Report& report, RegularizeReport& r)
       : soup_(soup), r_(r), partners_(soup.face_count()), split_(soup.face_count(), 0),
-        closed_(soup.face_count(), 0), registered_(soup.points.size(), 0), subs_(soup.face_count()) {
+        closed_(soup.face_count(), 0), registered_(soup.points.size(), 0), subs_(soup.face_count()),
+        cluster_(soup.face_count()) {
     points_.reserve(soup.points.size());
     for (const Point3d& p : soup.points) points_.emplace_back(p[0], p[1], p[2]);
-    for (const FacePair& p : pairs) {
-      partners_[p.first].push_back(Index(p.second));
-      partners_[p.second].push_back(Index(p.first));
+    // Coplanar overlaps (and duplicate faces) join their triangles into one
+    // cluster, sub-triangulated together so that coincident pieces are one
+    // piece standing for all the sheets there (its weight).
+    std::iota(cluster_.begin(), cluster_.end(), Index(0));
+    auto join = [&](Index a, Index b) {
+      partners_[a].push_back(b);
+      partners_[b].push_back(a);
+      if (coplanar(a, b)) cluster_[root(a)] = root(b);
+    };
+    for (const FacePair& p : pairs) join(Index(p.first), Index(p.second));
+    for (const auto& d : report.duplicate_faces) join(Index(d[0]), Index(d[1]));
+    for (auto& list : partners_) {
+      std::sort(list.begin(), list.end());
+      list.erase(std::unique(list.begin(), list.end()), list.end());
     }
+    for (std::size_t f = 0; f < soup.face_count(); ++f)
+      if (root(Index(f)) != f) members_[root(Index(f))].push_back(Index(f));
+    for (auto& [c, list] : members_) list.insert(list.begin(), c);
     pieces_.reserve(soup.face_count());
+    face_edges_.reserve(3 * soup.face_count());
     for (std::size_t f = 0; f < soup.face_count(); ++f) {
       const FaceView fv = soup.face(f);
       pieces_.push_back({{fv[0], fv[1], fv[2]}, Index(f)});
-      for (int e = 0; e < 3; ++e) {
-        edges_[edge_key(fv[e], fv[(e + 1) % 3])].push_back(Index(f));
-        face_edges_[edge_key(fv[e], fv[(e + 1) % 3])].push_back(Index(f));
-      }
+      for (int e = 0; e < 3; ++e) face_edges_.push_back({edge_key(fv[e], fv[(e + 1) % 3]), Index(f)});
     }
-    triangles_.reserve(soup.face_count());
-    for (std::size_t f = 0; f < soup.face_count(); ++f) {
-      const FaceView fv = soup.face(f);
-      auto ip = [&](Index v) { return IK::Point_3(soup.points[v][0], soup.points[v][1], soup.points[v][2]); };
-      triangles_.emplace_back(ip(fv[0]), ip(fv[1]), ip(fv[2]));
-    }
-    tree_.insert(triangles_.begin(), triangles_.end());
-    tree_.build();
+    std::sort(face_edges_.begin(), face_edges_.end());
     for (int k = 0; k < 3; ++k) below_[k] = report.bbox_min[k] - (1.0 + std::abs(report.bbox_min[k]));
   }
 
@@ -133,7 +141,7 @@ class Regularizer {
 
   /// The valid pieces as a soup: input vertices keep their doubles, new
   /// points are rounded to the nearest double.
-  Soup output(std::vector<std::size_t>& source) const {
+  Soup output(std::vector<std::size_t>& source, std::vector<char>& made) const {
     Soup out;
     std::vector<std::int64_t> id(points_.size(), -1);
     for (const Piece& p : pieces_) {
@@ -143,7 +151,9 @@ class Regularizer {
         std::int64_t& i = id[p.v[k]];
         if (i < 0) {
           i = std::int64_t(out.points.size());
-          out.points.push_back(p.v[k] < soup_.points.size() ? soup_.points[p.v[k]] : nearest_point3d(points_[p.v[k]]));
+          const bool input_vertex = p.v[k] < soup_.points.size();
+          out.points.push_back(input_vertex ? soup_.points[p.v[k]] : nearest_point3d(points_[p.v[k]]));
+          made.push_back(input_vertex ? 0 : 1);
         }
         f[k] = Index(i);
       }
@@ -175,8 +185,9 @@ class Regularizer {
       while (parent[x] != x) x = parent[x] = parent[parent[x]];
       return x;
     };
-    for (const auto& [key, list] : face_edges_)
-      for (std::size_t k = 1; k < list.size(); ++k) parent[find(list[k])] = find(list[0]);
+    for (std::size_t k = 1; k < face_edges_.size(); ++k)
+      if (face_edges_[k].first == face_edges_[k - 1].first)
+        parent[find(face_edges_[k].second)] = find(face_edges_[k - 1].second);
     std::vector<char> root_kept(faces, 0), root_seen(faces, 0);
     for (std::size_t f = 0; f < faces; ++f) {
       const Index root = find(Index(f));
@@ -193,21 +204,45 @@ class Regularizer {
   double seconds_intersections = 0;
 
  private:
+  // ---- clusters of coplanar overlapping triangles ------------------------
+
+  Index root(Index f) {
+    while (cluster_[f] != f) f = cluster_[f] = cluster_[cluster_[f]];
+    return f;
+  }
+
+  /// Are input faces a and b in one plane (exactly, on the doubles)?
+  bool coplanar(Index a, Index b) const {
+    const FaceView fa = soup_.face(a), fb = soup_.face(b);
+    auto ip = [&](Index v) { return IK::Point_3(soup_.points[v][0], soup_.points[v][1], soup_.points[v][2]); };
+    for (Index v : fb)
+      if (CGAL::orientation(ip(fa[0]), ip(fa[1]), ip(fa[2]), ip(v)) != CGAL::COPLANAR) return false;
+    return true;
+  }
+
+  /// The triangles split together with f: its cluster (f alone, usually).
+  std::vector<Index> cluster_of(Index f) {
+    const auto it = members_.find(root(f));
+    return it == members_.end() ? std::vector<Index>{f} : it->second;
+  }
+
   // ---- seeds (§3.3, generalised) -----------------------------------------
 
   void seed(Index q) {
     ++r_.seeds;
     const std::optional<int> w = winding_outside(q);
     if (!w) return;  // left for the growth to reach; unclassified if it never does
-    flood(q, *w == 0 ? kValid : kInvalid);
+    pieces_[q].front = *w;
+    flood(q, *w <= 0 && *w + pieces_[q].weight >= 1 ? kValid : kInvalid);
   }
 
   /// The winding number of the input surface just outside piece q (on the
   /// side its normal points to), decided exactly: a line parallel to the
   /// dominant axis k of q's normal, through a point of q with double
   /// coordinates, crosses the input triangles; those beyond q count +-1 by
-  /// the sign of their normal along the line. nullopt when no tried line
-  /// avoids every edge and vertex.
+  /// the sign of their normal along the line (those through the same point
+  /// are the sheets q stands for). nullopt when no tried line avoids every
+  /// edge and vertex. Valid: winding <= 0 outside and >= 1 inside.
   std::optional<int> winding_outside(Index q) {
     const Piece& piece = pieces_[q];
     const FaceView src = soup_.face(piece.source);
@@ -248,7 +283,8 @@ class Regularizer {
 
   /// The line {x_i = s, x_j = t} against the input triangles: the signed
   /// crossings beyond face `source` on its outer side (sign_k: the sign of
-  /// its normal along k). nullopt when the line meets an edge or a vertex.
+  /// its normal along k). nullopt when the line meets an edge or a vertex,
+  /// or lies in a triangle's plane.
   std::optional<int> cast(Index source, int k, double s, double t, int sign_k) {
     const int i = kept_axes(k)[0], j = kept_axes(k)[1];
     double o[3], d[3] = {0, 0, 0};
@@ -258,7 +294,7 @@ class Regularizer {
     d[k] = 1;
     const IK::Ray_3 ray(IK::Point_3(o[0], o[1], o[2]), IK::Vector_3(d[0], d[1], d[2]));
     std::vector<Primitive::Id> hits;
-    tree_.all_intersected_primitives(ray, std::back_inserter(hits));
+    tree().all_intersected_primitives(ray, std::back_inserter(hits));
     const K::FT at_source = plane_coordinate(source, k, s, t);
     const IK::Point_2 at(s, t);
     int winding = 0;
@@ -278,11 +314,26 @@ class Regularizer {
       }
       if (same != 3) continue;  // the box was hit, not the triangle
       const CGAL::Comparison_result c_at = CGAL::compare(plane_coordinate(g, k, s, t), at_source);
-      if (c_at == CGAL::EQUAL) return std::nullopt;
+      if (c_at == CGAL::EQUAL) continue;  // coplanar with the source there: one of the sheets q stands for
       const bool beyond = sign_k > 0 ? c_at == CGAL::LARGER : c_at == CGAL::SMALLER;
       if (beyond) winding += sign_k * int(og);  // sign of (direction . normal of g)
     }
     return winding;
+  }
+
+  /// The AABB tree of the input triangles, built on the first line cast.
+  const Tree& tree() {
+    if (triangles_.empty()) {
+      triangles_.reserve(soup_.face_count());
+      for (std::size_t f = 0; f < soup_.face_count(); ++f) {
+        const FaceView fv = soup_.face(f);
+        auto ip = [&](Index v) { return IK::Point_3(soup_.points[v][0], soup_.points[v][1], soup_.points[v][2]); };
+        triangles_.emplace_back(ip(fv[0]), ip(fv[1]), ip(fv[2]));
+      }
+      tree_.insert(triangles_.begin(), triangles_.end());
+      tree_.build();
+    }
+    return tree_;
   }
 
   /// The k coordinate where the line {x_i = s, x_j = t} meets face f's plane.
@@ -299,9 +350,10 @@ class Regularizer {
   // ---- growth (§3.4, §3.6) ------------------------------------------------
 
   /// Marks q with `state` and spreads it. Valid: to every continuation
-  /// (§3.4 through intersection-free neighbours, §3.6 across the river).
-  /// Invalid: only across edges with exactly two pieces (the winding numbers
-  /// on both sides carry over) and never into a triangle not yet split.
+  /// (§3.4 through intersection-free neighbours, §3.6 across the river),
+  /// each with the winding number on its outer side. Invalid: only across
+  /// edges with exactly two pieces (the winding numbers on both sides carry
+  /// over) and never into a triangle not yet split.
   void flood(Index q, State state) {
     std::vector<Index> front{q};
     pieces_[q].state = state;
@@ -312,12 +364,12 @@ class Regularizer {
       const Piece piece = pieces_[p];
       for (int e = 0; e < 3; ++e) {
         const Index a = piece.v[e], b = piece.v[(e + 1) % 3];
-        std::optional<Index> next;
+        std::optional<std::pair<Index, int>> next;  // piece, its front winding
         if (state == kValid) {
           const std::vector<Index> around = pieces_around(a, b, true);
           if (around.size() == 2) {
             const Index other = around[0] == p ? around[1] : around[0];
-            if (traverses(other, b, a)) next = other;
+            if (traverses(other, b, a) && pieces_[other].weight == piece.weight) next = {other, piece.front};
           } else if (around.size() > 2) {
             next = continuation(p, a, b, around);
           }
@@ -329,19 +381,20 @@ class Regularizer {
           const std::vector<Index> around = pieces_around(a, b, false);
           if (around.size() != 2) continue;
           const Index other = around[0] == p ? around[1] : around[0];
-          if (!traverses(other, b, a)) continue;
+          if (!traverses(other, b, a) || pieces_[other].weight != piece.weight) continue;
           const Index src = pieces_[other].source;
           if (!partners_[src].empty() && !split_[src]) continue;  // partially valid, perhaps
-          next = other;
+          next = {other, piece.front};
         }
-        Piece& n = pieces_[*next];
+        Piece& n = pieces_[next->first];
         if (n.state == state) continue;
         if (n.state != kUnvisited) {
           ++r_.orientation_conflicts;  // reached as valid and as invalid
           continue;
         }
         n.state = state;
-        front.push_back(*next);
+        n.front = next->second;
+        front.push_back(next->first);
       }
     }
   }
@@ -356,12 +409,14 @@ class Regularizer {
   /// The live pieces with edge ab. With `complete`, an input triangle among
   /// them that intersects others is split first (its pieces take its place).
   std::vector<Index> pieces_around(Index a, Index b, bool complete) {
+    const std::uint64_t key = edge_key(a, b);
     for (;;) {
       std::vector<Index> out;
-      const auto it = edges_.find(edge_key(a, b));
-      if (it == edges_.end()) return out;
+      std::vector<Index> candidates = faces_with_edge(key);  // input faces (pieces 0..F-1), alive or not
+      if (const auto it = edges_.find(key); it != edges_.end())
+        candidates.insert(candidates.end(), it->second.begin(), it->second.end());
       bool again = false;
-      for (Index p : it->second) {
+      for (Index p : candidates) {
         if (!pieces_[p].alive) continue;
         const Index src = pieces_[p].source;
         if (complete && !partners_[src].empty() && !split_[src]) {
@@ -377,9 +432,9 @@ class Regularizer {
 
   /// §3.6 crossing the river, generalised: the pieces around edge ab sorted
   /// by angle, starting from p's outer side; the winding number of each
-  /// wedge followed from 0 (p is valid); the first piece that bounds a
-  /// wedge of winding 0 on its outer side and 1 on its inner side.
-  std::optional<Index> continuation(Index p, Index a, Index b, const std::vector<Index>& around) {
+  /// wedge followed from p's outer side; the first piece that faces a wedge
+  /// of winding <= 0 and backs onto one of winding >= 1 (with that winding).
+  std::optional<std::pair<Index, int>> continuation(Index p, Index a, Index b, const std::vector<Index>& around) {
     const EPoint& A = points_[a];
     const EVector u = points_[b] - A;
     const EVector n0 = CGAL::cross_product(u, points_[third(p, a, b)] - A);
@@ -408,13 +463,14 @@ class Regularizer {
     for (std::size_t k = 1; k < items.size(); ++k)
       if (!before(items[k - 1], items[k]))  // same half-plane: coincident pieces
         throw UnsupportedInput(coplanar_message(pieces_[items[k - 1].piece].source, pieces_[items[k].piece].source));
-    int winding = 0;
+    int winding = pieces_[p].front;
     for (const Item& item : items) {
+      const int weight = pieces_[item.piece].weight;
       if (item.entering) {
-        if (winding == 0) return item.piece;
-        ++winding;
+        if (winding <= 0 && winding + weight >= 1) return std::make_pair(item.piece, winding);
+        winding += weight;
       } else {
-        --winding;
+        winding -= weight;
       }
     }
     return std::nullopt;
@@ -438,27 +494,35 @@ class Regularizer {
   /// of t exists.
   void close(Index t) {
     if (closed_[t]) return;
-    closed_[t] = 1;
     split(t);
-    for (Index u : partners_[t]) split(u);
-    const FaceView fv = soup_.face(t);
-    for (int e = 0; e < 3; ++e)
-      for (Index n : face_edges_[edge_key(fv[e], fv[(e + 1) % 3])])
-        if (!partners_[n].empty()) split(n);
+    for (Index m : cluster_of(t)) {
+      closed_[m] = 1;
+      for (Index u : partners_[m]) split(u);
+      const FaceView fv = soup_.face(m);
+      for (int e = 0; e < 3; ++e)
+        for (Index n : faces_with_edge(edge_key(fv[e], fv[(e + 1) % 3])))
+          if (!partners_[n].empty()) split(n);
+    }
   }
 
   /// Replaces input triangle t (which intersects others) by its
-  /// sub-triangles: §3.5 steps 1-3.
+  /// sub-triangles: §3.5 steps 1-3. The triangles t overlaps in its own plane
+  /// (its cluster) are split with it in one triangulation: a face of it
+  /// covered by several of them is one piece, oriented and weighted by their
+  /// net count (zero: no surface there).
   void split(Index t) {
     if (split_[t] || partners_[t].empty()) return;
-    split_[t] = 1;
-    ++r_.triangles_split;
-    const FaceView fv = soup_.face(t);
-    // Corners of t and of what it meets first, so that an intersection
-    // point that is an input vertex gets that vertex's id.
-    for (Index v : fv) register_vertex(v);
-    for (Index u : partners_[t])
-      for (Index v : soup_.face(u)) register_vertex(v);
+    const std::vector<Index> cluster = cluster_of(t);
+    for (Index m : cluster) split_[m] = 1;
+    r_.triangles_split += cluster.size();
+    // Corners of the cluster and of what it meets first, so that an
+    // intersection point that is an input vertex gets that vertex's id.
+    for (Index m : cluster) {
+      for (Index v : soup_.face(m)) register_vertex(v);
+      for (Index u : partners_[m])
+        for (Index v : soup_.face(u)) register_vertex(v);
+    }
+    const FaceView fv = soup_.face(cluster.front());
     const EVector n = CGAL::cross_product(points_[fv[1]] - points_[fv[0]], points_[fv[2]] - points_[fv[0]]);
     int k = 0;
     for (int a = 1; a < 3; ++a)
@@ -471,15 +535,28 @@ class Regularizer {
       if (h->info().id < 0) h->info().id = id;
       return h;
     };
-    for (Index v : fv) insert(v);
-    const auto t0 = std::chrono::steady_clock::now();
-    for (Index u : partners_[t]) {
-      const std::vector<Index>& seg = segment(t, u);
-      if (seg.size() == 1) insert(seg[0]);
-      if (seg.size() == 2) cdt.insert_constraint(insert(seg[0]), insert(seg[1]));
+    // each member's corners in the projection and its orientation there
+    std::vector<std::array<K::Point_2, 3>> corners;
+    std::vector<int> sign;
+    for (Index m : cluster) {
+      const FaceView mv = soup_.face(m);
+      std::array<CDT::Vertex_handle, 3> h;
+      for (int e = 0; e < 3; ++e) h[e] = insert(mv[e]);
+      if (cluster.size() > 1)
+        for (int e = 0; e < 3; ++e) cdt.insert_constraint(h[e], h[(e + 1) % 3]);
+      corners.push_back({h[0]->point(), h[1]->point(), h[2]->point()});
+      sign.push_back(int(CGAL::orientation(corners.back()[0], corners.back()[1], corners.back()[2])));
     }
+    const auto t0 = std::chrono::steady_clock::now();
+    for (Index m : cluster)
+      for (Index u : partners_[m]) {
+        if (root(u) == root(m)) continue;  // the cluster's own edges are constraints already
+        const std::vector<Index>& seg = segment(m, u);
+        if (seg.size() == 1) insert(seg[0]);
+        if (seg.size() == 2) cdt.insert_constraint(insert(seg[0]), insert(seg[1]));
+      }
     seconds_intersections += seconds_since(t0);
-    // crossings of segments (§3.5 step 2), lifted back onto t's plane
+    // crossings of segments (§3.5 step 2), lifted back onto the plane
     const EPoint& A = points_[fv[0]];
     for (auto h = cdt.finite_vertices_begin(); h != cdt.finite_vertices_end(); ++h) {
       if (h->info().id >= 0) continue;
@@ -489,27 +566,53 @@ class Regularizer {
       c[k] = A[k] - (n[i] * (c[i] - A[i]) + n[j] * (c[j] - A[j])) / n[k];
       h->info().id = vertex_id(EPoint(c[0], c[1], c[2]));
     }
-    const bool reverse = CGAL::is_negative(n[k]);
-    kill(t);
+    for (Index m : cluster) kill(m);
+    std::vector<Index> made;
     for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+      // net count of the members covering this face (counter-clockwise: +1)
+      int count = sign[0];
+      Index source = cluster.front();
+      if (cluster.size() > 1) {
+        const K::Point_2 c = CGAL::centroid(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point());
+        count = 0;
+        std::vector<std::size_t> covering;
+        for (std::size_t m = 0; m < cluster.size(); ++m) {
+          bool inside = true;
+          for (int e = 0; e < 3 && inside; ++e)
+            inside = int(CGAL::orientation(corners[m][e], corners[m][(e + 1) % 3], c)) == sign[m];
+          if (!inside) continue;
+          count += sign[m];
+          covering.push_back(m);
+        }
+        if (count == 0) continue;  // opposite sheets cancel (or no member there)
+        for (std::size_t m : covering)  // provenance: a member oriented like the piece
+          if (sign[m] * count > 0) {
+            source = cluster[m];
+            break;
+          }
+      }
       std::array<Index, 3> v{Index(f->vertex(0)->info().id), Index(f->vertex(1)->info().id),
                              Index(f->vertex(2)->info().id)};
-      if (reverse) std::swap(v[1], v[2]);
+      if (count < 0) std::swap(v[1], v[2]);
       const Index q = Index(pieces_.size());
-      pieces_.push_back({v, t});
-      subs_[t].push_back(q);
+      Piece piece{v, source};
+      piece.weight = std::abs(count);
+      pieces_.push_back(piece);
+      made.push_back(q);
       for (int e = 0; e < 3; ++e) edges_[edge_key(v[e], v[(e + 1) % 3])].push_back(q);
     }
-    r_.sub_triangles += subs_[t].size();
+    for (Index m : cluster) subs_[m] = made;
+    r_.sub_triangles += made.size();
   }
 
-  void kill(Index t) {
-    pieces_[t].alive = false;
-    const auto& v = pieces_[t].v;
-    for (int e = 0; e < 3; ++e) {
-      auto& list = edges_[edge_key(v[e], v[(e + 1) % 3])];
-      list.erase(std::remove(list.begin(), list.end(), t), list.end());
-    }
+  void kill(Index t) { pieces_[t].alive = false; }  // an input face: found by faces_with_edge, skipped
+
+  /// The input faces with an edge `key` (sorted list lookup).
+  std::vector<Index> faces_with_edge(std::uint64_t key) const {
+    std::vector<Index> out;
+    auto it = std::lower_bound(face_edges_.begin(), face_edges_.end(), std::make_pair(key, Index(0)));
+    for (; it != face_edges_.end() && it->first == key; ++it) out.push_back(it->second);
+    return out;
   }
 
   /// The intersection of input triangles t and u as global vertex ids (one
@@ -557,9 +660,12 @@ class Regularizer {
   std::vector<char> split_, closed_, registered_;
   std::vector<std::vector<Index>> subs_;  // per input face: its sub-triangles
   std::vector<Piece> pieces_;             // input faces (ids 0..F-1), then sub-triangles
-  std::unordered_map<std::uint64_t, std::vector<Index>> edges_;       // pieces by edge
-  std::unordered_map<std::uint64_t, std::vector<Index>> face_edges_;  // input faces by edge
+  std::unordered_map<std::uint64_t, std::vector<Index>> edges_;       // sub-triangles by edge
+  std::vector<std::pair<std::uint64_t, Index>> face_edges_;           // (edge, input face), sorted
   std::unordered_map<std::uint64_t, std::vector<Index>> segments_;    // by face pair
+  std::vector<Index> cluster_;                                          // union-find over coplanar overlaps
+  std::unordered_map<Index, std::vector<Index>> members_;              // cluster root -> its faces (2 or more)
+
   InputTriangles triangles_;
   Tree tree_;
   double below_[3];
@@ -578,20 +684,29 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   io.observer = o.observer;
   const Report in = inspect(input, io);
   if (in.faces == 0) throw UnsupportedInput("no faces");
-  if (!in.boundary_edges.empty())
-    throw UnsupportedInput("not closed (" + std::to_string(in.boundary_edges.size()) +
-                           " boundary edges, first at face " + std::to_string(in.boundary_edges.front().faces.front()) +
-                           "); regularize needs a closed surface");
-  if (!in.misoriented_edges.empty())
-    throw UnsupportedInput("not consistently oriented (first at face " +
-                           std::to_string(in.misoriented_edges.front().faces.front()) + ")");
+  // A closed, consistently oriented surface (non-manifold edges allowed):
+  // every edge used as often in each direction. Then the winding number is
+  // defined everywhere off the surface.
+  {
+    std::unordered_map<std::uint64_t, long> balance;
+    for (std::size_t f = 0; f < input.face_count(); ++f) {
+      const FaceView v = input.face(f);
+      for (int e = 0; e < 3; ++e) {
+        const Index a = v[e], b = v[(e + 1) % 3];
+        balance[(std::uint64_t(std::min(a, b)) << 32) | std::max(a, b)] += a < b ? 1 : -1;
+      }
+    }
+    for (const auto& [key, count] : balance)
+      if (count != 0)
+        throw UnsupportedInput("edge (" + std::to_string(key >> 32) + ", " + std::to_string(key & 0xFFFFFFFFu) +
+                               ") is used " + std::to_string(std::abs(count)) +
+                               " more times in one direction than in the other: the surface is not closed "
+                               "and consistently oriented, which regularize needs");
+  }
   if (!in.degenerate_faces.empty())
     throw UnsupportedInput(std::to_string(in.degenerate_faces.size()) + " zero-area faces (first: face " +
                            std::to_string(in.degenerate_faces.front()) +
                            "); remove them first (polyheal degenerate), §3.1");
-  if (!in.duplicate_faces.empty())
-    throw UnsupportedInput("duplicate faces " + std::to_string(in.duplicate_faces.front()[0]) + " and " +
-                           std::to_string(in.duplicate_faces.front()[1]));
   if (in.signed_volume < 0)
     throw UnsupportedInput("the surface encloses a negative volume (its faces point inwards); reverse it first");
   r.faces = in.faces;
@@ -620,7 +735,8 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
 
   t0 = std::chrono::steady_clock::now();
   if (o.observer) o.observer->stage("stitching");
-  result.soup = grow.output(result.source_face);
+  std::vector<char> made;  // per output vertex: a point on an intersection curve (rounded)
+  result.soup = grow.output(result.source_face, made);
   r.new_vertices = grow.new_points();
   r.faces_out = result.soup.face_count();
   r.vertices_out = result.soup.points.size();
@@ -634,7 +750,13 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   // doubles can make faces intersect again; deintersect's vertex moves (in
   // doubles) repair that where they can.
   if (o.observer) o.observer->stage("checking the rounded surface");
-  const std::vector<FacePair> rounded = find_self_intersections(result.soup);
+  // Only faces with a rounded corner can differ from the exact result.
+  std::vector<char> rounded_face(result.soup.face_count(), 0);
+  for (std::size_t f = 0; f < result.soup.face_count(); ++f)
+    for (Index v : result.soup.face(f)) rounded_face[f] |= made[v];
+  SelfIntersectionOptions only;
+  only.only = &rounded_face;
+  const std::vector<FacePair> rounded = find_self_intersections(result.soup, only);
   r.rounding_pairs = rounded.size();
   if (!rounded.empty()) {
     DeintersectOptions d;
@@ -663,17 +785,25 @@ void certify(const Soup& input, const Soup& written, const std::vector<std::size
   r.out = inspect(written);
   // Output -> input: each output triangle lies in the input triangle it came
   // from up to rounding; the distance to one triangle is convex, so its
-  // corners bound it.
+  // corners bound it. Computed exactly (doubles lose the rounding error in
+  // cancellation on slivers far from the origin), for the corners that are
+  // not the source triangle's own.
   r.max_distance_to_input = 0;
-  if (source_face.size() == written.face_count())
+  if (source_face.size() == written.face_count()) {
+    K::FT worst = 0;
     for (std::size_t f = 0; f < written.face_count(); ++f) {
       const FaceView s = input.face(source_face[f]);
-      for (Index v : written.face(f))
-        r.max_distance_to_input = std::max(
-            r.max_distance_to_input,
-            std::sqrt(detail::squared_distance_to_triangle(written.points[v], input.points[s[0]], input.points[s[1]],
-                                                           input.points[s[2]])));
+      const std::array<Point3d, 3> c{input.points[s[0]], input.points[s[1]], input.points[s[2]]};
+      for (Index v : written.face(f)) {
+        const Point3d& p = written.points[v];
+        if (p == c[0] || p == c[1] || p == c[2]) continue;
+        auto e = [](const Point3d& q) { return EPoint(q[0], q[1], q[2]); };
+        const K::FT d = CGAL::squared_distance(e(p), K::Triangle_3(e(c[0]), e(c[1]), e(c[2])));
+        if (d > worst) worst = d;
+      }
     }
+    r.max_distance_to_input = std::sqrt(CGAL::to_double(worst));
+  }
   const double bound = 1e-3 * r.bbox_diagonal;
   r.hausdorff = detail::hausdorff_distance(input, written, bound);
   r.hausdorff_error_bound = bound;

@@ -5,6 +5,7 @@
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
@@ -80,12 +81,24 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
     return std::sqrt(bound);
   };
   double lower = 0.0;
+  // The corners' nearest triangles: one query per distinct corner (a
+  // vertex is a corner of ~6 triangles), in parallel (the tree is built and
+  // only read; its search structure is made by the first, serial, query).
+  std::vector<Point3d> corners;
+  corners.reserve(3 * from.size());
+  for (const Corners& t : from) corners.insert(corners.end(), t.begin(), t.end());
+  std::sort(corners.begin(), corners.end());
+  corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+  std::vector<std::pair<double, std::size_t>> nearest(corners.size());
+  if (!corners.empty()) nearest[0] = to.nearest(corners[0]);
+  tbb::parallel_for(std::size_t(1), corners.size(), [&](std::size_t i) { nearest[i] = to.nearest(corners[i]); });
   std::vector<Piece> stack;
   for (const Corners& t : from) {
     Piece piece;
     piece.p = t;
     for (int k = 0; k < 3; ++k) {
-      const auto [d2, near] = to.nearest(t[k]);
+      const auto at = std::lower_bound(corners.begin(), corners.end(), t[k]) - corners.begin();
+      const auto [d2, near] = nearest[static_cast<std::size_t>(at)];
       piece.d[k] = std::sqrt(d2);
       piece.near[k] = near;
     }
