@@ -96,7 +96,7 @@ expect 2 "regularize refuses zero-area faces" -- "$bin" regularize "$tmp/tjuncti
 grep_out "zero-area faces" "$tmp/err" "regularize says to remove zero-area faces first"
 printf 'OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 2 3\n' > "$tmp/open.off"
 expect 2 "regularize refuses an open mesh" -- "$bin" regularize "$tmp/open.off" -o "$tmp/z.off"
-grep_out "open.off: not closed" "$tmp/err" "regularize names the file and the reason"
+grep_out "open.off: edge (0, 3) is used 1 more times in one direction than in the other: the surface is not closed" "$tmp/err" "regularize names the file, the edge and the reason"
 [ "$(wc -l < "$tmp/err")" -eq 1 ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: regularize error is not one line"; }
 [ ! -e "$tmp/z.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: regularize wrote output on error"; }
 expect 2 "regularize malformed input" -- "$bin" regularize "$tmp/bad.off" -o "$tmp/z.off"
