@@ -621,6 +621,7 @@ class Regularizer {
     const auto [it, inserted] = segments_.try_emplace(edge_key(t, u));
     if (!inserted) return it->second;
     ++r_.segments;
+    if (generic_segment(t, u, it->second)) return it->second;
     auto tri = [&](Index f) {
       const FaceView fv = soup_.face(f);
       return K::Triangle_3(points_[fv[0]], points_[fv[1]], points_[fv[2]]);
@@ -637,6 +638,59 @@ class Regularizer {
       throw UnsupportedInput(coplanar_message(t, u));
     }
     return ids;
+  }
+
+  /// The common case of segment(): triangles t and u in general position
+  /// with respect to each other (no corner of either in the other's plane,
+  /// no edge through an edge or a corner of the other), decided exactly on
+  /// the input's doubles. Then each end of their segment is where an edge of
+  /// one crosses the other, and is named by that pair, so the neighbour
+  /// sharing the edge gets the same point without comparing exact numbers.
+  /// False (ids untouched) when not in general position.
+  bool generic_segment(Index t, Index u, std::vector<Index>& ids) {
+    const FaceView tv = soup_.face(t), uv = soup_.face(u);
+    auto ip = [&](Index v) { return IK::Point_3(soup_.points[v][0], soup_.points[v][1], soup_.points[v][2]); };
+    const std::array<IK::Point_3, 3> a{ip(tv[0]), ip(tv[1]), ip(tv[2])}, b{ip(uv[0]), ip(uv[1]), ip(uv[2])};
+    std::array<CGAL::Orientation, 3> oa, ob;
+    for (int k = 0; k < 3; ++k) {
+      oa[k] = CGAL::orientation(b[0], b[1], b[2], a[k]);
+      ob[k] = CGAL::orientation(a[0], a[1], a[2], b[k]);
+      if (oa[k] == CGAL::COPLANAR || ob[k] == CGAL::COPLANAR) return false;
+    }
+    std::vector<Index> found;
+    // edges of x (corners sides ox against y's plane) crossing triangle y
+    auto crossings = [&](const FaceView& xv, const std::array<IK::Point_3, 3>& x, const std::array<CGAL::Orientation, 3>& ox,
+                         const std::array<IK::Point_3, 3>& y, Index y_face) {
+      for (int e = 0; e < 3; ++e) {
+        const int f = (e + 1) % 3;
+        if (ox[e] == ox[f]) continue;  // the edge stays on one side of y's plane
+        std::array<CGAL::Orientation, 3> side;
+        for (int k = 0; k < 3; ++k) {
+          side[k] = CGAL::orientation(x[e], x[f], y[k], y[(k + 1) % 3]);
+          if (side[k] == CGAL::COPLANAR) return false;  // through an edge or a corner of y
+        }
+        if (side[0] != side[1] || side[1] != side[2]) continue;  // passes beside y
+        found.push_back(edge_crossing(xv[e], xv[f], y_face));
+      }
+      return true;
+    };
+    if (!crossings(tv, a, oa, b, u) || !crossings(uv, b, ob, a, t)) return false;
+    if (found.size() != 2 && !found.empty()) return false;  // cannot happen in general position
+    ids = found;
+    return true;
+  }
+
+  /// The point where edge pq crosses the plane of input face w (exact), by
+  /// name: computed once per (edge, face).
+  Index edge_crossing(Index p, Index q, Index w) {
+    const auto [it, inserted] = crossings_.try_emplace({edge_key(p, q), w}, Index(0));
+    if (!inserted) return it->second;
+    const FaceView wv = soup_.face(w);
+    const EPoint &w0 = points_[wv[0]], &P = points_[p], &Q = points_[q];
+    const EVector n = CGAL::cross_product(points_[wv[1]] - w0, points_[wv[2]] - w0);
+    const K::FT dp = n * (P - w0), dq = n * (Q - w0);
+    it->second = vertex_id(P + (Q - P) * (dp / (dp - dq)));
+    return it->second;
   }
 
   void register_vertex(Index v) {
@@ -663,6 +717,12 @@ class Regularizer {
   std::unordered_map<std::uint64_t, std::vector<Index>> edges_;       // sub-triangles by edge
   std::vector<std::pair<std::uint64_t, Index>> face_edges_;           // (edge, input face), sorted
   std::unordered_map<std::uint64_t, std::vector<Index>> segments_;    // by face pair
+  struct PairHash {
+    std::size_t operator()(const std::pair<std::uint64_t, Index>& k) const {
+      return std::hash<std::uint64_t>()(k.first * 0x9E3779B97F4A7C15ull ^ k.second);
+    }
+  };
+  std::unordered_map<std::pair<std::uint64_t, Index>, Index, PairHash> crossings_;  // (edge, face) -> point
   std::vector<Index> cluster_;                                          // union-find over coplanar overlaps
   std::unordered_map<Index, std::vector<Index>> members_;              // cluster root -> its faces (2 or more)
 
