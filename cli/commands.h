@@ -19,4 +19,7 @@ void add_deintersect(CLI::App& app, int& exit_code);
 /// Adds `regularize` (Jung, Shin & Choi valid-region growing).
 void add_regularize(CLI::App& app, int& exit_code);
 
+/// Adds `offset` (raw offset, then regularization).
+void add_offset(CLI::App& app, int& exit_code);
+
 }  // namespace polyheal::cli

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   add_degenerate(app, exit_code);
   add_deintersect(app, exit_code);
   add_regularize(app, exit_code);
+  add_offset(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -214,6 +214,13 @@ TEST_CASE("regularize: coplanar overlaps, duplicate solids and touching faces (c
   }
 }
 
+TEST_CASE("regularize: a surface facing inwards encloses nothing") {
+  const RegularizeResult r = regularize(box({{{0, 0, 0}, {1, 1, 1}}}, true));
+  CHECK(r.soup.face_count() == 0);
+  CHECK(r.report.components_removed == 1);
+  CHECK_FALSE(r.report.certified);
+}
+
 TEST_CASE("regularize: refuses what it does not handle, naming the problem") {
   SECTION("open mesh") {
     Soup open = box({{{0, 0, 0}, {1, 1, 1}}});
@@ -221,7 +228,14 @@ TEST_CASE("regularize: refuses what it does not handle, naming the problem") {
     open.offsets.pop_back();
     CHECK_THROWS_WITH(regularize(open), Catch::Contains("not closed"));
   }
-  SECTION("inward-facing surface") {
-    CHECK_THROWS_WITH(regularize(box({{{0, 0, 0}, {1, 1, 1}}}, true)), Catch::Contains("negative volume"));
+  SECTION("zero-area face") {
+    // a box whose top is split by an exactly collinear face at a T-junction
+    Soup in = box({{{0, 0, 0}, {1, 1, 1}}});
+    CHECK_NOTHROW(regularize(in));
+    in.points.push_back({0.5, 0, 1});  // on the edge from corner 4 to corner 5
+    in.indices[3 * 2 + 0] = 8;         // face {4, 5, 6} becomes {8, 5, 6} ...
+    in.add_triangle(4, 8, 6);          // ... plus {4, 8, 6}
+    in.add_triangle(4, 5, 8);          // and the zero-area {4, 5, 8} closing the T-junction
+    CHECK_THROWS_WITH(regularize(in), Catch::Contains("zero-area"));
   }
 }

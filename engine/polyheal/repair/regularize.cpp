@@ -731,6 +731,41 @@ class Regularizer {
   double below_[3];
 };
 
+/// Distinct exact points can round to one double (slivers thinner than the
+/// spacing of doubles): those vertices merge, and the faces that lose a
+/// corner to it — zero-area at the written precision — go (snap rounding).
+void snap_rounded(RegularizeResult& result, std::vector<char>& made, RegularizeReport& r) {
+  Soup& s = result.soup;
+  const Weld weld = weld_identical_points(s.points);
+  if (weld.merged == 0) return;
+  r.rounding_merged = weld.merged;
+  Soup out;
+  std::vector<std::size_t> source;
+  std::vector<std::int64_t> id(s.points.size(), -1);
+  std::vector<char> out_made;
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    std::array<Index, 3> v;
+    for (int k = 0; k < 3; ++k) v[k] = weld.representative[s.face(f)[k]];
+    if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) {
+      ++r.rounding_collapsed;
+      continue;
+    }
+    for (Index& x : v) {
+      if (id[x] < 0) {
+        id[x] = std::int64_t(out.points.size());
+        out.points.push_back(s.points[x]);
+        out_made.push_back(made[x]);
+      }
+      x = Index(id[x]);
+    }
+    out.add_triangle(v[0], v[1], v[2]);
+    source.push_back(result.source_face[f]);
+  }
+  s = std::move(out);
+  result.source_face = std::move(source);
+  made = std::move(out_made);
+}
+
 }  // namespace
 
 RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
@@ -767,8 +802,6 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
     throw UnsupportedInput(std::to_string(in.degenerate_faces.size()) + " zero-area faces (first: face " +
                            std::to_string(in.degenerate_faces.front()) +
                            "); remove them first (polyheal degenerate), §3.1");
-  if (in.signed_volume < 0)
-    throw UnsupportedInput("the surface encloses a negative volume (its faces point inwards); reverse it first");
   r.faces = in.faces;
   r.vertices = raw.points.size();
   r.intersecting_pairs_in = in.self_intersections.size();
@@ -797,7 +830,8 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   if (o.observer) o.observer->stage("stitching");
   std::vector<char> made;  // per output vertex: a point on an intersection curve (rounded)
   result.soup = grow.output(result.source_face, made);
-  r.new_vertices = grow.new_points();
+  snap_rounded(result, made, r);
+  r.new_vertices = std::size_t(std::count(made.begin(), made.end(), char(1)));
   r.faces_out = result.soup.face_count();
   r.vertices_out = result.soup.points.size();
   for (std::size_t f = 0; f < result.soup.face_count(); ++f) {

@@ -46,12 +46,17 @@
 // - Laziness (§5 suggestion). Segments and sub-triangulations are computed
 //   only for triangles the wave front reaches and the triangles they touch.
 //
-// Not handled (refused with the face ids): coplanar overlapping faces.
+// Coplanar overlaps (and duplicate faces): the triangles overlapping in one
+// plane are sub-triangulated together, and a piece covered by several of them
+// stands for all of them, weighted by their net orientation count (opposite
+// sheets cancel: two solids touching face to face lose the shared wall).
 //
 // Rounding (ARCHITECTURE.md, certify after rounding): input vertices keep
 // their doubles bit for bit; points on intersection curves are exact and are
 // rounded to the nearest double on output. The written file is read back and
-// certified. A self-intersection that rounding re-created is repaired before
+// certified. Distinct points that round to the same double merge, and the
+// faces thinner than a double step between them go (snap rounding). A
+// self-intersection that rounding re-created is repaired before
 // that with the local operations of `deintersect` (vertex moves in doubles);
 // what is still left is reported, with exit code 1.
 #pragma once
@@ -90,6 +95,8 @@ struct RegularizeReport {
   std::size_t faces_kept = 0;          // output faces that are input faces, bit for bit
   double seconds_detect = 0, seconds_intersections = 0, seconds_grow = 0, seconds_stitch = 0,
          seconds_certify = 0;
+  std::size_t rounding_merged = 0;     // distinct exact points that rounded to one double (merged)
+  std::size_t rounding_collapsed = 0;  // faces that lost a corner to such a merge (thinner than a double step)
   std::size_t rounding_pairs = 0;      // intersecting pairs rounding created (before their repair)
   std::size_t rounding_moves = 0;      // vertices deintersect moved to repair them
   // certificate, on the soup as written (certify())
@@ -108,9 +115,9 @@ struct RegularizeResult {
 
 /// Stages 1-3, the repair of what rounding broke, and, with
 /// options.certify, stage 4 on the rounded result. Throws UnsupportedInput
-/// for an input that is not a closed, consistently oriented triangle mesh,
-/// has zero-area faces, encloses negative volume, or has coplanar overlapping
-/// faces.
+/// for an input that is not a closed, consistently oriented triangle mesh
+/// (every edge used as often in each direction) or has zero-area faces. An
+/// input facing inwards everywhere encloses nothing: the output is empty.
 RegularizeResult regularize(const Soup& input, const RegularizeOptions& options = {});
 
 /// Stage 4 on `written` (the output as read back; `input` as given): fills the

@@ -1,0 +1,146 @@
+// polyheal CLI — the regularize report (text and JSON), shared by
+// `regularize` and `offset` (whose output is a regularized raw offset).
+#pragma once
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "polyheal/repair/regularize.h"
+#include "repair_command.h"
+
+namespace polyheal::cli {
+
+inline double peak_memory_mb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) / 1024.0;  // Linux: kilobytes
+}
+
+/// What keeps the written file from being certified, one phrase each.
+inline std::vector<std::string> defects(const Report& out) {
+  std::vector<std::string> d;
+  auto add = [&](std::size_t n, const char* what) {
+    if (n) d.push_back(std::to_string(n) + " " + what);
+  };
+  add(out.boundary_edges.size(), "boundary edges");
+  add(out.nonmanifold_edges.size(), "non-manifold edges");
+  add(out.nonmanifold_vertices.size(), "non-manifold vertices");
+  add(out.misoriented_edges.size(), "misoriented edges");
+  add(out.degenerate_faces.size(), "degenerate faces");
+  add(out.duplicate_faces.size(), "duplicate faces");
+  add(out.self_intersections.size(), "intersecting pairs");
+  if (out.faces == 0) d.push_back("no face left");
+  return d;
+}
+
+inline nlohmann::json regularize_json(const RepairFiles& a, const RegularizeReport& r, double read_s, double write_s) {
+  const double diag = r.bbox_diagonal > 0 ? r.bbox_diagonal : 1.0;
+  nlohmann::json intersections = nlohmann::json::array();
+  for (const FacePair& p : r.out.self_intersections) intersections.push_back({p.first, p.second});
+  return {
+      {"schema", "polyheal.regularize/1"},
+      {"input", a.input},
+      {"output", a.output},
+      {"certified", r.certified},
+      {"bbox_diagonal", r.bbox_diagonal},
+      {"input_mesh",
+       {{"faces", r.faces},
+        {"vertices", r.vertices},
+        {"components", r.components_in},
+        {"intersecting_pairs", r.intersecting_pairs_in},
+        {"intersecting_faces", r.intersecting_faces_in}}},
+      {"triangles",
+       {{"valid", r.valid}, {"partially_valid", r.partially_valid}, {"invalid", r.invalid},
+        {"split", r.triangles_split}, {"sub_triangles", r.sub_triangles}, {"unclassified", r.unclassified}}},
+      {"intersection_segments", r.segments},
+      {"seeds", r.seeds},
+      {"lines_cast", r.line_casts},
+      {"orientation_conflicts", r.orientation_conflicts},
+      {"components_removed", r.components_removed},
+      {"output_mesh",
+       {{"faces", r.faces_out},
+        {"vertices", r.vertices_out},
+        {"new_vertices", r.new_vertices},
+        {"faces_kept", r.faces_kept},
+        {"components", r.out.components},
+        {"closed", r.out.closed},
+        {"manifold", r.out.manifold},
+        {"oriented", r.out.oriented},
+        {"degenerate_faces", r.out.degenerate_faces.size()},
+        {"intersecting_pairs", intersections},
+        {"volume", r.out.signed_volume},
+        {"defects", defects(r.out)}}},
+      {"rounding",
+       {{"merged_points", r.rounding_merged},
+        {"collapsed_faces", r.rounding_collapsed},
+        {"intersecting_pairs", r.rounding_pairs},
+        {"vertices_moved", r.rounding_moves}}},
+      {"max_distance_to_input", r.max_distance_to_input},
+      {"max_distance_to_input_relative", r.max_distance_to_input / diag},
+      {"hausdorff", r.hausdorff},
+      {"hausdorff_error_bound", r.hausdorff_error_bound},
+      {"hausdorff_relative", r.hausdorff / diag},
+      {"seconds",
+       {{"read", read_s},
+        {"detect", r.seconds_detect},
+        {"intersections", r.seconds_intersections},
+        {"grow", r.seconds_grow},
+        {"stitch", r.seconds_stitch},
+        {"write_and_verify", write_s}}},
+      {"peak_memory_mb", peak_memory_mb()},
+  };
+}
+
+inline void print_regularize_text(const RepairFiles& a, const RegularizeReport& r) {
+  const double diag = r.bbox_diagonal > 0 ? r.bbox_diagonal : 1.0;
+  std::printf("%s -> %s\n", a.input.c_str(), a.output.c_str());
+  std::printf("  input: %zu triangles, %zu vertices, %zu components; %zu intersecting pairs (%zu triangles)\n",
+              r.faces, r.vertices, r.components_in, r.intersecting_pairs_in, r.intersecting_faces_in);
+  std::printf("  triangles: %zu valid, %zu partially valid, %zu invalid; %zu split into %zu sub-triangles\n", r.valid,
+              r.partially_valid, r.invalid, r.triangles_split, r.sub_triangles);
+  std::printf("  %zu intersection segments; %zu seeds, %zu winding-number lines\n", r.segments, r.seeds,
+              r.line_casts);
+  if (r.components_removed)
+    std::printf("  %zu input components removed entirely (inside the volume, or enclosing none)\n",
+                r.components_removed);
+  if (r.unclassified) std::printf("  %zu sub-triangles could not be classified (left out)\n", r.unclassified);
+  if (r.orientation_conflicts)
+    std::printf("  %zu river crossings found no compatible continuation\n", r.orientation_conflicts);
+  std::printf("  output: %zu triangles (%zu input faces kept bit for bit), %zu vertices (%zu new)\n", r.faces_out,
+              r.faces_kept, r.vertices_out, r.new_vertices);
+  if (r.rounding_merged)
+    std::printf("  rounding to doubles merged %zu points; %zu faces thinner than a double step went\n",
+                r.rounding_merged, r.rounding_collapsed);
+  if (r.rounding_pairs)
+    std::printf("  rounding to doubles made %zu pairs intersect; deintersect moved %zu vertices\n", r.rounding_pairs,
+                r.rounding_moves);
+  std::printf("  distance to the input: output -> input at most %.3g; Hausdorff %.6g +- %.2g (%.3g%% of the bbox "
+              "diagonal)\n",
+              r.max_distance_to_input, r.hausdorff, r.hausdorff_error_bound, 100.0 * r.hausdorff / diag);
+  std::printf("  volume %.9g, %zu components\n", r.out.signed_volume, r.out.components);
+  std::printf("  time: detect %.3f s, intersections %.3f s, grow %.3f s, stitch %.3f s, certify %.3f s; peak memory "
+              "%.0f MB\n",
+              r.seconds_detect, r.seconds_intersections, r.seconds_grow, r.seconds_stitch, r.seconds_certify,
+              peak_memory_mb());
+  const std::vector<std::string> d = defects(r.out);
+  std::string list;
+  for (const std::string& s : d) list += (list.empty() ? "" : ", ") + s;
+  std::printf("  => %s%s\n", r.certified ? "CERTIFIED: closed, 2-manifold, oriented, no degenerate face, no "
+                                           "self-intersection"
+                                         : "NOT CERTIFIED: ",
+              r.certified ? "" : list.c_str());
+  const std::size_t shown = a.list ? r.out.self_intersections.size()
+                                   : std::min<std::size_t>(r.out.self_intersections.size(), 10);
+  for (std::size_t k = 0; k < shown; ++k)
+    std::printf("    intersecting: faces %zu and %zu\n", r.out.self_intersections[k].first,
+                r.out.self_intersections[k].second);
+  if (shown < r.out.self_intersections.size())
+    std::printf("    ... and %zu more (--list)\n", r.out.self_intersections.size() - shown);
+}
+
+}  // namespace polyheal::cli
