@@ -56,7 +56,7 @@ inline nlohmann::json regularize_json(const RepairFiles& a, const RegularizeRepo
         {"intersecting_faces", r.intersecting_faces_in}}},
       {"triangles",
        {{"valid", r.valid}, {"partially_valid", r.partially_valid}, {"invalid", r.invalid},
-        {"split", r.triangles_split}, {"sub_triangles", r.sub_triangles}, {"unclassified", r.unclassified}}},
+        {"split", r.triangles_split}, {"split_unreached", r.split_unreached}, {"sub_triangles", r.sub_triangles}, {"unclassified", r.unclassified}}},
       {"intersection_segments", r.segments},
       {"seeds", r.seeds},
       {"lines_cast", r.line_casts},
@@ -101,8 +101,9 @@ inline void print_regularize_text(const RepairFiles& a, const RegularizeReport& 
   std::printf("%s -> %s\n", a.input.c_str(), a.output.c_str());
   std::printf("  input: %zu triangles, %zu vertices, %zu components; %zu intersecting pairs (%zu triangles)\n",
               r.faces, r.vertices, r.components_in, r.intersecting_pairs_in, r.intersecting_faces_in);
-  std::printf("  triangles: %zu valid, %zu partially valid, %zu invalid; %zu split into %zu sub-triangles\n", r.valid,
-              r.partially_valid, r.invalid, r.triangles_split, r.sub_triangles);
+  std::printf("  triangles: %zu valid, %zu partially valid, %zu invalid; %zu split into %zu sub-triangles (%zu never "
+              "reached by a wave)\n",
+              r.valid, r.partially_valid, r.invalid, r.triangles_split, r.sub_triangles, r.split_unreached);
   std::printf("  %zu intersection segments; %zu seeds, %zu winding-number lines\n", r.segments, r.seeds,
               r.line_casts);
   if (r.components_removed)

@@ -187,8 +187,23 @@ if want regularize; then
     "$b/polyheal_gen" torus-knot --faces 20000 --radius "$r" "$work/knot20k_r$r.off" >/dev/null
     reg_inputs+=("$work/knot20k_r$r.off")
   done
-  "$b/polyheal_gen" torus-knot --faces 200000 --radius 1.2 "$work/knot200k_r1.2.off" >/dev/null
-  reg_inputs+=("$work/knot200k_r1.2.off")
+  for n in 150000 200000 1000000; do
+    "$b/polyheal_gen" torus-knot --faces "$n" --radius 1.2 "$work/knot$((n / 1000))k_r1.2.off" >/dev/null
+    reg_inputs+=("$work/knot$((n / 1000))k_r1.2.off")
+  done
+  # raw offsets (`polyheal offset --raw`): what regularize is for
+  raw_offset() {  # raw_offset IN D NAME
+    "$b/polyheal" offset --raw --overwrite "$1" -d "$2" -o "$work/$3" >/dev/null 2>&1 || true
+    [ -f "$work/$3" ] && reg_inputs+=("$work/$3")
+  }
+  printf 'OFF\n8 12 0\n0 0 0\n2 0 0\n2 2 0\n0 2 0\n0 0 2\n2 0 2\n2 2 2\n0 2 2\n3 0 2 1\n3 0 3 2\n3 4 5 6\n3 4 6 7\n3 0 1 5\n3 0 5 4\n3 1 2 6\n3 1 6 5\n3 2 3 7\n3 2 7 6\n3 3 0 4\n3 3 4 7\n' > "$work/cube2.off"
+  raw_offset "$work/cube2.off" -0.5 raw_offset_cube_-0.5.off
+  raw_offset "$root/fixtures/anchor.off" 0.0583 raw_offset_anchor_+2pc.off
+  raw_offset "$root/fixtures/anchor.off" -0.0583 raw_offset_anchor_-2pc.off
+  raw_offset "$root/fixtures/thingi10k_65004.stl" 0.69 raw_offset_thingi10k_65004_+0.69.off
+  raw_offset "$root/fixtures/thingi10k_65004.stl" -0.69 raw_offset_thingi10k_65004_-0.69.off
+  raw_offset "$root/fixtures/torus_knot_20k.off" 0.6 raw_offset_torus_knot_20k_+0.6.off
+  raw_offset "$root/fixtures/torus_knot_20k.off" -0.1 raw_offset_torus_knot_20k_-0.1.off
   while IFS= read -r f; do reg_inputs+=("$corpus/$f"); done < <(awk -F'\t' 'NR > 1 && $11 > 0 && $16 == 0 {print $1}' "$corpus/MANIFEST.tsv")
   for f in "${reg_inputs[@]}"; do
     [ -f "$f" ] || continue
@@ -353,7 +368,11 @@ TAIL
 Closed meshes that overlap themselves or each other: the fixtures, generated
 torus-knot tubes whose radius makes them overlap (`polyheal_gen torus-knot --radius R`:
 0.9 overlaps where strands pass close, 1.2 and beyond also where the radius exceeds
-the curve's), and the corpus meshes with an exact self-intersection that are closed.
+the curve's; 20k to 1M faces), raw offsets written by `polyheal offset --raw`
+(`raw_offset_*`: the input, the distance), and the corpus meshes with an exact
+self-intersection that are closed. On a raw offset both tools compute the union;
+`polyheal offset` also removes the fold pockets (see README), which this table's
+regularize column does not.
 "verdict": `polyheal check` on each written file (CERTIFIED CLEAN, or what is left).
 "kept": output faces that are input faces bit for bit. "volume": the enclosed volume
 of polyheal's output and its relative difference from CGAL's (both compute the union).

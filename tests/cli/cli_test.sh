@@ -103,5 +103,22 @@ expect 2 "regularize malformed input" -- "$bin" regularize "$tmp/bad.off" -o "$t
 expect 2 "regularize never writes over its input" -- "$bin" regularize "$tmp/sph_union.off" -o "$tmp/sph_union.off" --overwrite
 expect 0 "regularize help" -- "$bin" regularize --help
 grep_out "winding number >= 1" "$tmp/out" "regularize help explains what is kept"
+# polyheal offset
+printf 'OFF\n8 12 0\n0 0 0\n2 0 0\n2 2 0\n0 2 0\n0 0 2\n2 0 2\n2 2 2\n0 2 2\n3 0 2 1\n3 0 3 2\n3 4 5 6\n3 4 6 7\n3 0 1 5\n3 0 5 4\n3 1 2 6\n3 1 6 5\n3 2 3 7\n3 2 7 6\n3 3 0 4\n3 3 4 7\n' > "$tmp/cube.off"
+expect 0 "offset rounds a cube outwards" -- "$bin" offset "$tmp/cube.off" -d 0.5 -o "$tmp/cube_out.off"
+grep_out "12 sharp edges, 8 corners" "$tmp/out" "offset reports the strips and patches"
+expect 0 "offset output checks clean" -- "$bin" check "$tmp/cube_out.off"
+expect 0 "offset inwards --json" -- "$bin" offset --json "$tmp/cube.off" -d -0.5 --tolerance 2% -o "$tmp/cube_in.off"
+grep_out '"schema": "polyheal.offset/1"' "$tmp/out" "offset json schema tag"
+grep_out '"pockets_removed": 8' "$tmp/out" "offset json counts the corner pockets"
+grep_out '"tolerance": 0.01' "$tmp/out" "offset --tolerance in percent of |d|"
+expect 1 "offset --raw is not certified" -- "$bin" offset --raw "$tmp/cube.off" -d -0.5 -o "$tmp/cube_raw.off"
+expect 1 "the raw inward offset self-intersects" -- "$bin" check "$tmp/cube_raw.off"
+expect 2 "offset needs a distance" -- "$bin" offset "$tmp/cube.off" -o "$tmp/w.off"
+expect 2 "offset refuses an open mesh" -- "$bin" offset "$tmp/open.off" -d 0.1 -o "$tmp/w.off"
+grep_out "open.off: edge" "$tmp/err" "offset names the file and the edge"
+[ ! -e "$tmp/w.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: offset wrote output on error"; }
+expect 0 "offset help" -- "$bin" offset --help
+grep_out "spherical patches" "$tmp/out" "offset help explains the raw offset"
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -130,9 +130,12 @@ class Regularizer {
       if (observer && f % 4096 == 0) observer->progress(0.5 + 0.5 * double(f) / double(faces));
       if (partners_[f].empty()) continue;
       if (!split_[f]) {
-        // A triangle the valid region never reached: classify it only if
-        // something of it could still be valid (a sub-triangle not reached).
+        // A triangle no wave reached: its sub-triangles are classified by
+        // lines of their own (a component of the output made only of pieces
+        // of intersecting triangles has no intersection-free seed).
+        const std::size_t before = r_.triangles_split;
         split(Index(f));
+        r_.split_unreached += r_.triangles_split - before;
       }
       for (Index q : subs_[f])
         if (pieces_[q].state == kUnvisited) seed(q);
