@@ -238,7 +238,7 @@ if want regularize; then
       [ "$cv" = certified ] && reg_cgal=$((reg_cgal + 1))
       cg_vol=$({ "$b/polyheal" check --json "$work/reg_cgal.off" 2>/dev/null || true; } | json_num signed_volume /dev/stdin)
       vol="—"
-      [ -n "$ours_vol" ] && [ -n "$cg_vol" ] && vol=$(awk "BEGIN{d = $ours_vol - $cg_vol; if (d < 0) d = -d; m = $cg_vol < 0 ? -$cg_vol : $cg_vol; printf \"%.6g (%.1g)\", $ours_vol, (m > 0 ? d / m : d)}")
+      [ -n "$ours_vol" ] && [ -n "$cg_vol" ] && vol=$(awk -v a="$ours_vol" -v c="$cg_vol" 'BEGIN{d = a - c; if (d < 0) d = 0 - d; m = c < 0 ? 0 - c : c; printf "%.6g (%.1g)", a, (m > 0 ? d / m : d)}')
       peer="$cv | $cg_faces | $vol | $cg_wall s ($cg_s s), $((cg_kb / 1024)) MB | $(tetgen_verdict "$work/reg_cgal.off")"
     fi
     reg_rows+="| $name | $faces | $pairs | $ours | $peer |"$'\n'

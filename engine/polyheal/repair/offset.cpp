@@ -291,47 +291,58 @@ void drop_pockets(const Soup& input, const Soup& raw, double inside, RegularizeR
   Soup& s = reg.soup;
   const std::size_t F = s.face_count();
   if (F == 0) return;
-  // components through shared edges (a pocket may touch the rest at a vertex)
-  std::vector<Index> parent(F);
-  std::iota(parent.begin(), parent.end(), Index(0));
-  auto find = [&](Index x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  std::vector<std::pair<std::uint64_t, Index>> edges;
-  edges.reserve(3 * F);
-  for (std::size_t f = 0; f < F; ++f)
-    for (int e = 0; e < 3; ++e) {
-      const Index a = s.face(f)[e], b = s.face(f)[(e + 1) % 3];
-      edges.push_back({(std::uint64_t(std::min(a, b)) << 32) | std::max(a, b), Index(f)});
-    }
-  std::sort(edges.begin(), edges.end());
-  for (std::size_t k = 1; k < edges.size(); ++k)
-    if (edges[k].first == edges[k - 1].first) parent[find(edges[k].second)] = find(edges[k - 1].second);
   const detail::SurfaceDistance distance(input);
   std::vector<double> vertex_distance(s.points.size(), -1);
-  std::map<Index, std::vector<double>> by_component;
   for (std::size_t f = 0; f < F; ++f)
-    for (Index v : s.face(f)) {
+    for (Index v : s.face(f))
       if (vertex_distance[v] < 0) vertex_distance[v] = std::sqrt(distance.squared_distance(s.points[v]));
-      by_component[find(Index(f))].push_back(vertex_distance[v]);
+  // Two groupings: faces sharing a vertex (a cluster of pockets touching each
+  // other goes as one), then faces sharing an edge (a pocket touching the
+  // rest of the surface at a vertex goes alone).
+  std::vector<char> drop(F, 0);
+  const std::size_t before = r.pockets_removed;
+  for (const bool by_vertex : {true, false}) {
+    std::vector<Index> parent(F);
+    std::iota(parent.begin(), parent.end(), Index(0));
+    auto find = [&](Index x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    std::vector<std::pair<std::uint64_t, Index>> keys;  // (vertex or edge, face)
+    for (std::size_t f = 0; f < F; ++f) {
+      if (drop[f]) continue;
+      for (int e = 0; e < 3; ++e) {
+        const Index a = s.face(f)[e], b = s.face(f)[(e + 1) % 3];
+        keys.push_back({by_vertex ? std::uint64_t(a) : (std::uint64_t(std::min(a, b)) << 32) | std::max(a, b),
+                        Index(f)});
+      }
     }
-  std::vector<char> drop_root(F, 0);
-  for (auto& [root, d] : by_component) {
-    std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() / 2), d.end());
-    if (d[d.size() / 2] < inside) {
-      drop_root[root] = 1;
-      ++r.pockets_removed;
+    std::sort(keys.begin(), keys.end());
+    for (std::size_t k = 1; k < keys.size(); ++k)
+      if (keys[k].first == keys[k - 1].first) parent[find(keys[k].second)] = find(keys[k - 1].second);
+    std::map<Index, std::vector<double>> by_component;
+    for (std::size_t f = 0; f < F; ++f)
+      if (!drop[f])
+        for (Index v : s.face(f)) by_component[find(Index(f))].push_back(vertex_distance[v]);
+    std::vector<char> drop_root(F, 0);
+    for (auto& [root, d] : by_component) {
+      std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() / 2), d.end());
+      if (d[d.size() / 2] < inside) {
+        drop_root[root] = 1;
+        ++r.pockets_removed;
+      }
     }
+    for (std::size_t f = 0; f < F; ++f)
+      if (!drop[f] && drop_root[find(Index(f))]) drop[f] = 1;
   }
-  if (!r.pockets_removed) return;
+  if (r.pockets_removed == before) return;
   Soup kept;
   std::vector<std::size_t> source;
   std::vector<std::int64_t> id(s.points.size(), -1);
   std::size_t kept_faces = 0;
   for (std::size_t f = 0; f < F; ++f) {
     const FaceView v = s.face(f);
-    if (drop_root[find(Index(f))]) {
+    if (drop[f]) {
       ++r.pocket_faces;
       continue;
     }
