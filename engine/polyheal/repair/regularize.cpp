@@ -654,6 +654,10 @@ class Regularizer {
     const FaceView tv = soup_.face(t), uv = soup_.face(u);
     auto ip = [&](Index v) { return IK::Point_3(soup_.points[v][0], soup_.points[v][1], soup_.points[v][2]); };
     const std::array<IK::Point_3, 3> a{ip(tv[0]), ip(tv[1]), ip(tv[2])}, b{ip(uv[0]), ip(uv[1]), ip(uv[2])};
+    int shared = 0;
+    for (Index x : tv) shared += (x == uv[0] || x == uv[1] || x == uv[2]) ? 1 : 0;
+    if (shared == 1) return generic_shared_vertex(t, tv, a, u, uv, b, ids);
+    if (shared > 1) return false;
     std::array<CGAL::Orientation, 3> oa, ob;
     for (int k = 0; k < 3; ++k) {
       oa[k] = CGAL::orientation(b[0], b[1], b[2], a[k]);
@@ -680,6 +684,39 @@ class Regularizer {
     if (!crossings(tv, a, oa, b, u) || !crossings(uv, b, ob, a, t)) return false;
     if (found.size() != 2 && !found.empty()) return false;  // cannot happen in general position
     ids = found;
+    return true;
+  }
+
+  /// generic_segment() for triangles sharing one vertex s (a raw offset's
+  /// face and the strip beside it): their segment runs from s to where the
+  /// edge opposite s in one of them crosses the other.
+  bool generic_shared_vertex(Index t, const FaceView& tv, const std::array<IK::Point_3, 3>& a, Index u,
+                             const FaceView& uv, const std::array<IK::Point_3, 3>& b, std::vector<Index>& ids) {
+    Index s = 0;
+    for (Index x : tv)
+      if (x == uv[0] || x == uv[1] || x == uv[2]) s = x;
+    std::vector<Index> found;
+    // the edge of x opposite s against triangle y (y_face: its input face)
+    auto opposite = [&](const FaceView& xv, const std::array<IK::Point_3, 3>& x, const std::array<IK::Point_3, 3>& y,
+                        Index y_face) {
+      int k = 0;
+      while (xv[k] != s) ++k;
+      const int e = (k + 1) % 3, f = (k + 2) % 3;
+      const CGAL::Orientation oe = CGAL::orientation(y[0], y[1], y[2], x[e]);
+      const CGAL::Orientation of = CGAL::orientation(y[0], y[1], y[2], x[f]);
+      if (oe == CGAL::COPLANAR || of == CGAL::COPLANAR) return false;
+      if (oe == of) return true;  // the edge stays on one side of y's plane
+      std::array<CGAL::Orientation, 3> side;
+      for (int j = 0; j < 3; ++j) {
+        side[j] = CGAL::orientation(x[e], x[f], y[j], y[(j + 1) % 3]);
+        if (side[j] == CGAL::COPLANAR) return false;
+      }
+      if (side[0] == side[1] && side[1] == side[2]) found.push_back(edge_crossing(xv[e], xv[f], y_face));
+      return true;
+    };
+    if (!opposite(tv, a, b, u) || !opposite(uv, b, a, t)) return false;
+    if (found.size() != 1) return false;
+    ids = {s, found[0]};
     return true;
   }
 
