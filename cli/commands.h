@@ -22,4 +22,7 @@ void add_regularize(CLI::App& app, int& exit_code);
 /// Adds `offset` (raw offset, then regularization).
 void add_offset(CLI::App& app, int& exit_code);
 
+/// Adds `union` (Boolean union of closed meshes by regularization).
+void add_union(CLI::App& app, int& exit_code);
+
 }  // namespace polyheal::cli

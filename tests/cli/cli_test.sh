@@ -120,5 +120,12 @@ grep_out "open.off: edge" "$tmp/err" "offset names the file and the edge"
 [ ! -e "$tmp/w.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: offset wrote output on error"; }
 expect 0 "offset help" -- "$bin" offset --help
 grep_out "spherical patches" "$tmp/out" "offset help explains the raw offset"
+# polyheal union
+printf 'OFF\n8 12 0\n1 0.5 0.25\n3 0.5 0.25\n3 2.5 0.25\n1 2.5 0.25\n1 0.5 2.25\n3 0.5 2.25\n3 2.5 2.25\n1 2.5 2.25\n3 0 2 1\n3 0 3 2\n3 4 5 6\n3 4 6 7\n3 0 1 5\n3 0 5 4\n3 1 2 6\n3 1 6 5\n3 2 3 7\n3 2 7 6\n3 3 0 4\n3 3 4 7\n' > "$tmp/cube_b.off"
+expect 0 "union of two overlapping cubes" -- "$bin" union "$tmp/cube.off" "$tmp/cube_b.off" -o "$tmp/union.off"
+grep_out "volume 13.375, 1 components" "$tmp/out" "union encloses 8 + 8 - 2.625"
+expect 0 "union output checks clean" -- "$bin" check "$tmp/union.off"
+expect 2 "union needs two inputs" -- "$bin" union "$tmp/cube.off" -o "$tmp/u2.off"
+expect 2 "union never writes over an input" -- "$bin" union "$tmp/cube.off" "$tmp/cube_b.off" -o "$tmp/cube_b.off" --overwrite
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]

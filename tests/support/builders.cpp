@@ -20,13 +20,7 @@ Soup tetrahedron(double dx, double dy, double dz) {
 
 Soup concat(const Soup& a, const Soup& b) {
   Soup s = a;
-  const Index shift = static_cast<Index>(a.points.size());
-  s.points.insert(s.points.end(), b.points.begin(), b.points.end());
-  for (std::size_t f = 0; f < b.face_count(); ++f) {
-    std::vector<Index> v(b.face(f).begin(), b.face(f).end());
-    for (Index& i : v) i += shift;
-    s.add_face(v.begin(), v.end());
-  }
+  s.append(b);
   return s;
 }
 

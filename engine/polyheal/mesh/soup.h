@@ -48,6 +48,17 @@ struct Soup {
     offsets.push_back(indices.size());
   }
   bool is_triangle_soup() const { return indices.size() == 3 * face_count(); }
+
+  /// Appends `other`'s points and faces (its indices shifted past ours; no
+  /// point shared). Face groups are dropped.
+  void append(const Soup& other) {
+    const Index shift = static_cast<Index>(points.size());
+    points.insert(points.end(), other.points.begin(), other.points.end());
+    for (Index i : other.indices) indices.push_back(i + shift);
+    for (std::size_t f = 1; f < other.offsets.size(); ++f) offsets.push_back(offsets.back() + (other.offsets[f] - other.offsets[f - 1]));
+    face_group.clear();
+    group_names.clear();
+  }
 };
 
 }  // namespace polyheal
