@@ -75,6 +75,7 @@ inline nlohmann::json regularize_json(const RepairFiles& a, const RegularizeRepo
         {"intersecting_pairs", intersections},
         {"volume", r.out.signed_volume},
         {"defects", defects(r.out)}}},
+      {"pinches", {{"split", r.pinches_split}, {"max_displacement", r.pinch_displacement}}},
       {"rounding",
        {{"merged_points", r.rounding_merged},
         {"collapsed_faces", r.rounding_collapsed},
@@ -114,6 +115,9 @@ inline void print_regularize_text(const RepairFiles& a, const RegularizeReport& 
     std::printf("  %zu river crossings found no compatible continuation\n", r.orientation_conflicts);
   std::printf("  output: %zu triangles (%zu input faces kept bit for bit), %zu vertices (%zu new)\n", r.faces_out,
               r.faces_kept, r.vertices_out, r.new_vertices);
+  if (r.pinches_split)
+    std::printf("  the union's boundary pinched at %zu vertices: one copy per cone, moved into it by at most %.3g\n",
+                r.pinches_split, r.pinch_displacement);
   if (r.rounding_merged)
     std::printf("  rounding to doubles merged %zu points; %zu faces thinner than a double step went\n",
                 r.rounding_merged, r.rounding_collapsed);

@@ -214,6 +214,24 @@ TEST_CASE("regularize: coplanar overlaps, duplicate solids and touching faces (c
   }
 }
 
+TEST_CASE("regularize: where the union's boundary pinches, each cone gets its own vertex, moved into it") {
+  // two boxes touching at one corner (welded: one vertex of both)
+  const Soup in = test::concat(box({{{0, 0, 0}, {1, 1, 1}}}), box({{{1, 1, 1}, {2, 3, 2}}}));
+  REQUIRE_FALSE(inspect(in).manifold);
+  const RegularizeResult r = regularize(in);
+  const Report rep = inspect(written(r, "regularize_pinch.off"));
+  CHECK(rep.certified_clean());
+  CHECK(rep.components == 2);
+  CHECK(r.report.pinches_split == 1);
+  CHECK(r.report.pinch_displacement > 0);
+  CHECK(r.report.pinch_displacement <= 0.01 + 1e-12);  // 1% of the shortest edge at the corner
+  CHECK(r.report.max_distance_to_input <= r.report.pinch_displacement + 1e-12);
+  // 1 + 2, less what the moved corners cut off (faces of area <= 2 at the
+  // corner, moved by <= 0.01)
+  CHECK(rep.signed_volume < 3);
+  CHECK(rep.signed_volume > 3 - 3 * 2 * 0.01);
+}
+
 TEST_CASE("regularize: a surface facing inwards encloses nothing") {
   const RegularizeResult r = regularize(box({{{0, 0, 0}, {1, 1, 1}}}, true));
   CHECK(r.soup.face_count() == 0);

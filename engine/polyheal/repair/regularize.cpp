@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <optional>
@@ -806,6 +807,94 @@ void snap_rounded(RegularizeResult& result, std::vector<char>& made, RegularizeR
   made = std::move(out_made);
 }
 
+/// The union's boundary can pinch: at a vertex where two of its cones touch
+/// (two faces sharing the vertex fold through each other, so the valid
+/// sectors around it meet only there), the exact result is not a 2-manifold.
+/// Each cone gets its own copy of the vertex, moved into its cone by 1% of
+/// its shortest edge there: the cones come apart, the surface moves by that
+/// much (reported as the distance to the input), and the changed faces are
+/// checked again (made[] marks the copies as new points).
+void split_pinches(RegularizeResult& result, std::vector<char>& made, RegularizeReport& r) {
+  Soup& s = result.soup;
+  const std::size_t F = s.face_count();
+  // (vertex, other end of an edge at it, face): faces around a vertex that
+  // share an edge there belong to one cone
+  std::vector<std::array<Index, 3>> uses;
+  uses.reserve(6 * F);
+  for (std::size_t f = 0; f < F; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Index v = s.face(f)[k];
+      uses.push_back({v, s.face(f)[(k + 1) % 3], Index(f)});
+      uses.push_back({v, s.face(f)[(k + 2) % 3], Index(f)});
+    }
+  std::sort(uses.begin(), uses.end());
+  // union-find over (vertex, face) corners: index 3f + corner
+  std::vector<Index> parent(3 * F);
+  std::iota(parent.begin(), parent.end(), Index(0));
+  auto find = [&](Index x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  auto corner = [&](Index f, Index v) {
+    const FaceView fv = s.face(f);
+    return Index(3 * f + (fv[0] == v ? 0 : fv[1] == v ? 1 : 2));
+  };
+  for (std::size_t k = 1; k < uses.size(); ++k)
+    if (uses[k][0] == uses[k - 1][0] && uses[k][1] == uses[k - 1][1])
+      parent[find(corner(uses[k][2], uses[k][0]))] = find(corner(uses[k - 1][2], uses[k][0]));
+  // per vertex, its cones (roots)
+  std::map<Index, std::map<Index, std::vector<Index>>> cones;  // vertex -> root -> corners
+  {
+    std::vector<Index> first_root(s.points.size(), ~Index(0));
+    std::vector<char> pinched(s.points.size(), 0);
+    for (std::size_t c = 0; c < 3 * F; ++c) {
+      const Index v = s.face(c / 3)[c % 3], root = find(Index(c));
+      if (first_root[v] == ~Index(0)) first_root[v] = root;
+      else if (first_root[v] != root) pinched[v] = 1;
+    }
+    for (std::size_t c = 0; c < 3 * F; ++c) {
+      const Index v = s.face(c / 3)[c % 3];
+      if (pinched[v]) cones[v][find(Index(c))].push_back(Index(c));
+    }
+  }
+  for (auto& [v, by_root] : cones) {
+    ++r.pinches_split;
+    const Point3d p = s.points[v];
+    bool first = true;
+    for (auto& [root, corners] : by_root) {
+      Point3d centre{0, 0, 0};
+      double shortest = std::numeric_limits<double>::infinity();
+      std::size_t n = 0;
+      for (Index c : corners) {
+        const FaceView fv = s.face(c / 3);
+        for (int k = 1; k < 3; ++k) {
+          const Point3d& q = s.points[fv[(c % 3 + k) % 3]];
+          const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+          shortest = std::min(shortest, std::sqrt(dx * dx + dy * dy + dz * dz));
+          for (int a = 0; a < 3; ++a) centre[a] += q[a];
+          ++n;
+        }
+      }
+      Point3d dir{centre[0] / double(n) - p[0], centre[1] / double(n) - p[1], centre[2] / double(n) - p[2]};
+      const double len = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+      if (!(len > 0)) continue;
+      const double step = 0.01 * shortest / len;
+      const Point3d moved{p[0] + step * dir[0], p[1] + step * dir[1], p[2] + step * dir[2]};
+      Index copy = v;
+      if (first) s.points[v] = moved;  // the vertex itself becomes the first cone's apex
+      else {
+        copy = Index(s.points.size());
+        s.points.push_back(moved);
+        made.push_back(1);
+      }
+      if (first) made[v] = 1;
+      first = false;
+      r.pinch_displacement = std::max(r.pinch_displacement, step * len);
+      for (Index c : corners) s.indices[s.offsets[c / 3] + c % 3] = copy;
+    }
+  }
+}
+
 }  // namespace
 
 RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
@@ -871,6 +960,7 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   std::vector<char> made;  // per output vertex: a point on an intersection curve (rounded)
   result.soup = grow.output(result.source_face, made);
   snap_rounded(result, made, r);
+  split_pinches(result, made, r);
   r.new_vertices = std::size_t(std::count(made.begin(), made.end(), char(1)));
   r.faces_out = result.soup.face_count();
   r.vertices_out = result.soup.points.size();
