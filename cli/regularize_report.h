@@ -80,7 +80,8 @@ inline nlohmann::json regularize_json(const RepairFiles& a, const RegularizeRepo
        {{"merged_points", r.rounding_merged},
         {"collapsed_faces", r.rounding_collapsed},
         {"intersecting_pairs", r.rounding_pairs},
-        {"vertices_moved", r.rounding_moves}}},
+        {"vertices_moved", r.rounding_moves},
+        {"passes", r.rounding_passes}}},
       {"max_distance_to_input", r.max_distance_to_input},
       {"max_distance_to_input_relative", r.max_distance_to_input / diag},
       {"hausdorff", r.hausdorff},
@@ -122,8 +123,9 @@ inline void print_regularize_text(const RepairFiles& a, const RegularizeReport& 
     std::printf("  rounding to doubles merged %zu points; %zu faces thinner than a double step went\n",
                 r.rounding_merged, r.rounding_collapsed);
   if (r.rounding_pairs)
-    std::printf("  rounding to doubles made %zu pairs intersect; deintersect moved %zu vertices\n", r.rounding_pairs,
-                r.rounding_moves);
+    std::printf("  rounding to doubles made %zu pairs intersect; deintersect moved %zu vertices; %d regularization "
+                "passes\n",
+                r.rounding_pairs, r.rounding_moves, r.rounding_passes);
   std::printf("  distance to the input: output -> input at most %.3g; Hausdorff %.6g +- %.2g (%.3g%% of the bbox "
               "diagonal)\n",
               r.max_distance_to_input, r.hausdorff, r.hausdorff_error_bound, 100.0 * r.hausdorff / diag);

@@ -990,8 +990,29 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
       r.rounding_moves = fixed.report.moved_vertices;
       result.soup = std::move(fixed.soup);
     } catch (const UnsupportedInput&) {
-      // not a manifold mesh: the certificate reports what is left
+      // not a manifold mesh: the next pass or the certificate deals with it
     }
+    // What is still intersecting is regularized again, exactly, on the
+    // rounded coordinates: each pass leaves fewer and smaller crossings to
+    // round (iterated snap rounding).
+    for (int pass = 1; pass < o.max_passes && !find_self_intersections(result.soup).empty(); ++pass) {
+      RegularizeOptions again;
+      again.certify = false;
+      again.max_passes = 1;
+      try {
+        RegularizeResult next = regularize(result.soup, again);
+        for (std::size_t& f : next.source_face) f = result.source_face[f];
+        result.soup = std::move(next.soup);
+        result.source_face = std::move(next.source_face);
+        r.rounding_passes = pass + 1;
+        r.pinches_split += next.report.pinches_split;
+        r.pinch_displacement = std::max(r.pinch_displacement, next.report.pinch_displacement);
+      } catch (const UnsupportedInput&) {
+        break;  // e.g. rounding made a face zero-area: the certificate reports it
+      }
+    }
+    r.faces_out = result.soup.face_count();
+    r.vertices_out = result.soup.points.size();
   }
   r.seconds_stitch = seconds_since(t0);
 

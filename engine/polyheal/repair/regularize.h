@@ -56,9 +56,11 @@
 // rounded to the nearest double on output. The written file is read back and
 // certified. Distinct points that round to the same double merge, and the
 // faces thinner than a double step between them go (snap rounding). A
-// self-intersection that rounding re-created is repaired before
-// that with the local operations of `deintersect` (vertex moves in doubles);
-// what is still left is reported, with exit code 1.
+// self-intersection that rounding re-created is repaired before that with the
+// local operations of `deintersect` (vertex moves in doubles); what they
+// leave is regularized again, exactly, on the rounded coordinates (up to
+// max_passes: iterated snap rounding); what is still left is reported, with
+// exit code 1.
 #pragma once
 
 #include <cstddef>
@@ -73,6 +75,7 @@ namespace polyheal {
 
 struct RegularizeOptions {
   bool certify = true;  // certify the rounded result (callers that certify the written file say false)
+  int max_passes = 3;   // regularizations of the rounded result while rounding leaves crossings
   Observer* observer = nullptr;
 };
 
@@ -102,6 +105,7 @@ struct RegularizeReport {
   double pinch_displacement = 0;       // largest move of a pinch copy into its cone
   std::size_t rounding_pairs = 0;      // intersecting pairs rounding created (before their repair)
   std::size_t rounding_moves = 0;      // vertices deintersect moved to repair them
+  int rounding_passes = 1;             // regularizations run (more than 1: crossings rounding left were regularized again)
   // certificate, on the soup as written (certify())
   Report out;                          // the exact inspection of the written file
   double max_distance_to_input = 0;    // output -> input (each output triangle to the input triangle it lies on)
