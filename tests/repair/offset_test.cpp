@@ -237,6 +237,23 @@ TEST_CASE("offset: a corpus CAD part outwards: certified, at distance d from the
   }
 }
 
+TEST_CASE("regularize: a CAD part's raw offset, where rounding the intersection points makes faces cross again") {
+  // anchor.off offset by 2% of its bbox diagonal: its regularized union has
+  // pinches and points whose rounding to doubles makes faces intersect; what
+  // deintersect's moves leave is regularized again on the rounded coordinates
+  OffsetOptions o;
+  o.distance = 0.0583;
+  o.regularize = false;
+  const Soup raw = offset(read_soup(test::fixture("anchor.off")), o).raw;
+  const RegularizeResult r = regularize(raw);
+  CHECK(r.report.rounding_pairs > 0);  // the case is at stake
+  CHECK(r.report.rounding_passes > 1);
+  const std::string path = test::scratch("regularize_anchor_raw_offset.off");
+  write_soup(r.soup, path);
+  CHECK(inspect(read_soup(path)).certified_clean());
+  CHECK(r.report.max_distance_to_input < 1e-3 * r.report.bbox_diagonal);
+}
+
 TEST_CASE("offset: refuses a non-manifold or open input and a zero distance") {
   Soup open = cube(1);
   open.indices.resize(open.indices.size() - 3);
