@@ -52,6 +52,7 @@ inline nlohmann::json regularize_json(const RepairFiles& a, const RegularizeRepo
        {{"faces", r.faces},
         {"vertices", r.vertices},
         {"components", r.components_in},
+        {"polygons_fanned", r.polygons_fanned},
         {"intersecting_pairs", r.intersecting_pairs_in},
         {"intersecting_faces", r.intersecting_faces_in}}},
       {"triangles",
@@ -108,6 +109,9 @@ inline void print_regularize_text(const RepairFiles& a, const RegularizeReport& 
               r.valid, r.partially_valid, r.invalid, r.triangles_split, r.sub_triangles, r.split_unreached);
   std::printf("  %zu intersection segments; %zu seeds, %zu winding-number lines\n", r.segments, r.seeds,
               r.line_casts);
+  if (r.polygons_fanned)
+    std::printf("  %zu polygons fanned into triangles (counts below are of triangles)\n",
+                r.polygons_fanned);
   if (r.components_removed)
     std::printf("  %zu input components removed entirely (inside the volume, or enclosing none)\n",
                 r.components_removed);

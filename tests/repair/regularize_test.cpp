@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <set>
+#include <vector>
 
 #include "polyheal/inspect/report.h"
 #include "polyheal/io/read.h"
@@ -230,6 +231,28 @@ TEST_CASE("regularize: where the union's boundary pinches, each cone gets its ow
   // corner, moved by <= 0.01)
   CHECK(rep.signed_volume < 3);
   CHECK(rep.signed_volume > 3 - 3 * 2 * 0.01);
+}
+
+TEST_CASE("regularize: quad faces are fanned, and the output names the quad each face came from") {
+  auto quad_box = [](const Box& b) {
+    const auto& [lo, hi] = b;
+    Soup s;
+    s.points = {{lo[0], lo[1], lo[2]}, {hi[0], lo[1], lo[2]}, {hi[0], hi[1], lo[2]}, {lo[0], hi[1], lo[2]},
+                {lo[0], lo[1], hi[2]}, {hi[0], lo[1], hi[2]}, {hi[0], hi[1], hi[2]}, {lo[0], hi[1], hi[2]}};
+    for (const std::array<Index, 4>& q : std::vector<std::array<Index, 4>>{
+             {0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}})
+      s.add_face(q.begin(), q.end());
+    return s;
+  };
+  const Box a{{{0, 0, 0}, {2, 2, 2}}}, b{{{1, 0.5, 0.25}, {3, 2.5, 2.75}}};
+  const Soup in = test::concat(quad_box(a), quad_box(b));
+  const RegularizeResult r = regularize(in);
+  CHECK(r.report.polygons_fanned == 12);
+  const Report rep = inspect(written(r, "regularize_quads.off"));
+  CHECK(rep.certified_clean());
+  CHECK(rep.signed_volume == Approx(volume(a) + volume(b) - volume(meet(a, b))).epsilon(1e-12));
+  for (std::size_t s : r.source_face) CHECK(s < in.face_count());
+  CHECK(r.report.max_distance_to_input < 1e-12);
 }
 
 TEST_CASE("regularize: a surface facing inwards encloses nothing") {

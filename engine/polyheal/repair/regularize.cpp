@@ -895,6 +895,21 @@ void split_pinches(RegularizeResult& result, std::vector<char>& made, Regularize
   }
 }
 
+/// The corner polygon f is fanned from: the first whose fan has no exactly
+/// zero-area triangle (0 if none has).
+std::size_t fan_apex(const Soup& soup, std::size_t f) {
+  const FaceView v = soup.face(f);
+  const std::size_t n = v.size();
+  auto ip = [&](Index i) { return IK::Point_3(soup.points[i][0], soup.points[i][1], soup.points[i][2]); };
+  for (std::size_t a = 0; a < n; ++a) {
+    bool flat = false;
+    for (std::size_t k = 1; k + 1 < n && !flat; ++k)
+      flat = CGAL::collinear(ip(v[a]), ip(v[(a + k) % n]), ip(v[(a + k + 1) % n]));
+    if (!flat) return a;
+  }
+  return 0;
+}
+
 }  // namespace
 
 RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
@@ -902,7 +917,30 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   RegularizeReport& r = result.report;
   auto t0 = std::chrono::steady_clock::now();
   if (o.observer) o.observer->stage("detecting");
-  if (!raw.is_triangle_soup()) throw UnsupportedInput("not a triangle mesh (polygons with more than 3 corners)");
+  if (!raw.is_triangle_soup()) {
+    // Polygons are fanned, from the first corner whose fan has no zero-area
+    // triangle (decided exactly; a polygon with collinear corners along a
+    // side has one); the output's provenance names the polygon.
+    Soup fanned;
+    fanned.points = raw.points;
+    std::vector<std::size_t> polygon;
+    for (std::size_t f = 0; f < raw.face_count(); ++f) {
+      const FaceView v = raw.face(f);
+      const std::size_t n = v.size();
+      if (n < 3) throw UnsupportedInput("face " + std::to_string(f) + " has fewer than 3 corners");
+      const std::size_t apex = fan_apex(raw, f);
+      for (std::size_t k = 1; k + 1 < n; ++k) {
+        fanned.add_triangle(v[apex], v[(apex + k) % n], v[(apex + k + 1) % n]);
+        polygon.push_back(f);
+      }
+    }
+    RegularizeResult result = regularize(fanned, o);
+    for (std::size_t& f : result.source_face) f = polygon[f];
+    result.report.faces = raw.face_count();
+    for (std::size_t f = 0; f < raw.face_count(); ++f) result.report.polygons_fanned += raw.face(f).size() > 3 ? 1 : 0;
+    if (o.certify) certify(raw, result.soup, result.source_face, result.report);
+    return result;
+  }
   const Soup input = apply_weld(raw, weld_identical_points(raw.points));
   InspectOptions io;
   io.observer = o.observer;
@@ -1036,16 +1074,26 @@ void certify(const Soup& input, const Soup& written, const std::vector<std::size
   r.max_distance_to_input = 0;
   if (source_face.size() == written.face_count()) {
     K::FT worst = 0;
+    auto e = [](const Point3d& q) { return EPoint(q[0], q[1], q[2]); };
     for (std::size_t f = 0; f < written.face_count(); ++f) {
+      // the source polygon's fan triangle that bounds this face best (one
+      // triangle for a triangle)
       const FaceView s = input.face(source_face[f]);
-      const std::array<Point3d, 3> c{input.points[s[0]], input.points[s[1]], input.points[s[2]]};
-      for (Index v : written.face(f)) {
-        const Point3d& p = written.points[v];
-        if (p == c[0] || p == c[1] || p == c[2]) continue;
-        auto e = [](const Point3d& q) { return EPoint(q[0], q[1], q[2]); };
-        const K::FT d = CGAL::squared_distance(e(p), K::Triangle_3(e(c[0]), e(c[1]), e(c[2])));
-        if (d > worst) worst = d;
+      const std::size_t n = s.size(), a = n > 3 ? fan_apex(input, source_face[f]) : 0;
+      std::optional<K::FT> best;
+      for (std::size_t k = 1; k + 1 < n; ++k) {
+        const std::array<Point3d, 3> c{input.points[s[a]], input.points[s[(a + k) % n]],
+                                       input.points[s[(a + k + 1) % n]]};
+        K::FT m = 0;
+        for (Index v : written.face(f)) {
+          const Point3d& p = written.points[v];
+          if (p == c[0] || p == c[1] || p == c[2]) continue;
+          const K::FT d = CGAL::squared_distance(e(p), K::Triangle_3(e(c[0]), e(c[1]), e(c[2])));
+          if (d > m) m = d;
+        }
+        if (!best || m < *best) best = m;
       }
+      if (best && *best > worst) worst = *best;
     }
     r.max_distance_to_input = std::sqrt(CGAL::to_double(worst));
   }

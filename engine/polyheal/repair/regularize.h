@@ -82,6 +82,7 @@ struct RegularizeOptions {
 struct RegularizeReport {
   // input
   std::size_t faces = 0, vertices = 0, components_in = 0;
+  std::size_t polygons_fanned = 0;     // input faces with more than 3 corners, fanned into triangles
   std::size_t intersecting_pairs_in = 0, intersecting_faces_in = 0;
   double bbox_diagonal = 0;
   // growing (the paper's Table 1 and Fig. 2 groups, counted over input triangles)
