@@ -814,16 +814,28 @@ void snap_rounded(RegularizeResult& result, std::vector<char>& made, RegularizeR
 /// its shortest edge there: the cones come apart, the surface moves by that
 /// much (reported as the distance to the input), and the changed faces are
 /// checked again (made[] marks the copies as new points).
-void split_pinches(RegularizeResult& result, std::vector<char>& made, RegularizeReport& r) {
+void split_pinches(const Soup& input, bool input_manifold, RegularizeResult& result, std::vector<char>& made,
+                   RegularizeReport& r) {
   Soup& s = result.soup;
   const std::size_t F = s.face_count();
+  // Only vertices of faces that are not input faces kept as they were can
+  // pinch (and any vertex, if the input itself is not a manifold).
+  std::vector<char> candidate(s.points.size(), input_manifold ? 0 : 1);
+  if (input_manifold)
+    for (std::size_t f = 0; f < F; ++f) {
+      const FaceView a = input.face(result.source_face[f]), b = s.face(f);
+      bool same = true;
+      for (int k = 0; k < 3 && same; ++k) same = input.points[a[k]] == s.points[b[k]];
+      if (!same)
+        for (Index v : b) candidate[v] = 1;
+    }
   // (vertex, other end of an edge at it, face): faces around a vertex that
   // share an edge there belong to one cone
   std::vector<std::array<Index, 3>> uses;
-  uses.reserve(6 * F);
   for (std::size_t f = 0; f < F; ++f)
     for (int k = 0; k < 3; ++k) {
       const Index v = s.face(f)[k];
+      if (!candidate[v]) continue;
       uses.push_back({v, s.face(f)[(k + 1) % 3], Index(f)});
       uses.push_back({v, s.face(f)[(k + 2) % 3], Index(f)});
     }
@@ -848,13 +860,15 @@ void split_pinches(RegularizeResult& result, std::vector<char>& made, Regularize
     std::vector<Index> first_root(s.points.size(), ~Index(0));
     std::vector<char> pinched(s.points.size(), 0);
     for (std::size_t c = 0; c < 3 * F; ++c) {
-      const Index v = s.face(c / 3)[c % 3], root = find(Index(c));
+      const Index v = s.face(c / 3)[c % 3];
+      if (!candidate[v]) continue;
+      const Index root = find(Index(c));
       if (first_root[v] == ~Index(0)) first_root[v] = root;
       else if (first_root[v] != root) pinched[v] = 1;
     }
     for (std::size_t c = 0; c < 3 * F; ++c) {
       const Index v = s.face(c / 3)[c % 3];
-      if (pinched[v]) cones[v][find(Index(c))].push_back(Index(c));
+      if (candidate[v] && pinched[v]) cones[v][find(Index(c))].push_back(Index(c));
     }
   }
   for (auto& [v, by_root] : cones) {
@@ -998,7 +1012,7 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   std::vector<char> made;  // per output vertex: a point on an intersection curve (rounded)
   result.soup = grow.output(result.source_face, made);
   snap_rounded(result, made, r);
-  split_pinches(result, made, r);
+  split_pinches(input, in.nonmanifold_vertices.empty(), result, made, r);
   r.new_vertices = std::size_t(std::count(made.begin(), made.end(), char(1)));
   r.faces_out = result.soup.face_count();
   r.vertices_out = result.soup.points.size();
