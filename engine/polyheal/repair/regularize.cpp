@@ -449,13 +449,20 @@ class Regularizer {
       bool entering;  // traverses b -> a: crossing it while rotating enters its inside
     };
     std::vector<Item> items;
+    const Index plane = root(pieces_[p].source);
     for (Index q : around) {
       if (q == p) continue;
       const EVector w = points_[third(q, a, b)] - A;
-      const CGAL::Sign side = CGAL::sign(n0 * w);
-      int half = side == CGAL::POSITIVE ? 0 : side == CGAL::NEGATIVE ? 2 : 1;
-      if (half == 1 && CGAL::is_positive(n0 * CGAL::cross_product(u, w)))
-        throw UnsupportedInput(coplanar_message(pieces_[p].source, pieces_[q].source));
+      int half = 1;
+      // A piece of p's own plane (its triangle or cluster) across the edge
+      // lies opposite p (two pieces of one triangulation do not overlap):
+      // known without an exact test, which would be degenerate and costly.
+      if (root(pieces_[q].source) != plane) {
+        const CGAL::Sign side = CGAL::sign(n0 * w);
+        half = side == CGAL::POSITIVE ? 0 : side == CGAL::NEGATIVE ? 2 : 1;
+        if (half == 1 && CGAL::is_positive(n0 * CGAL::cross_product(u, w)))
+          throw UnsupportedInput(coplanar_message(pieces_[p].source, pieces_[q].source));
+      }
       items.push_back({q, w, half, traverses(q, b, a)});
     }
     auto before = [&](const Item& x, const Item& y) {
@@ -1077,6 +1084,28 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   return result;
 }
 
+namespace {
+
+/// An upper bound on the squared distance from p to triangle c, tight to
+/// the double: interval arithmetic first (no rounding error can hide in it),
+/// the exact value only when an interval comparison inside the distance
+/// computation cannot be decided (p on an edge's line, say).
+template <class Exact>
+double squared_distance_upper(const Point3d& p, const std::array<Point3d, 3>& c, Exact e) {
+  using IA = CGAL::Simple_cartesian<CGAL::Interval_nt<false>>;
+  {
+    CGAL::Protect_FPU_rounding<true> protect;
+    try {
+      auto ia = [](const Point3d& q) { return IA::Point_3(q[0], q[1], q[2]); };
+      return CGAL::squared_distance(ia(p), IA::Triangle_3(ia(c[0]), ia(c[1]), ia(c[2]))).sup();
+    } catch (const CGAL::Uncertain_conversion_exception&) {
+    }
+  }
+  return CGAL::to_interval(CGAL::squared_distance(e(p), K::Triangle_3(e(c[0]), e(c[1]), e(c[2])))).second;
+}
+
+}  // namespace
+
 void certify(const Soup& input, const Soup& written, const std::vector<std::size_t>& source_face,
              RegularizeReport& r) {
   r.out = inspect(written);
@@ -1087,29 +1116,28 @@ void certify(const Soup& input, const Soup& written, const std::vector<std::size
   // not the source triangle's own.
   r.max_distance_to_input = 0;
   if (source_face.size() == written.face_count()) {
-    K::FT worst = 0;
+    double worst = 0;
     auto e = [](const Point3d& q) { return EPoint(q[0], q[1], q[2]); };
     for (std::size_t f = 0; f < written.face_count(); ++f) {
       // the source polygon's fan triangle that bounds this face best (one
       // triangle for a triangle)
       const FaceView s = input.face(source_face[f]);
       const std::size_t n = s.size(), a = n > 3 ? fan_apex(input, source_face[f]) : 0;
-      std::optional<K::FT> best;
+      std::optional<double> best;
       for (std::size_t k = 1; k + 1 < n; ++k) {
         const std::array<Point3d, 3> c{input.points[s[a]], input.points[s[(a + k) % n]],
                                        input.points[s[(a + k + 1) % n]]};
-        K::FT m = 0;
+        double m = 0;
         for (Index v : written.face(f)) {
           const Point3d& p = written.points[v];
           if (p == c[0] || p == c[1] || p == c[2]) continue;
-          const K::FT d = CGAL::squared_distance(e(p), K::Triangle_3(e(c[0]), e(c[1]), e(c[2])));
-          if (d > m) m = d;
+          m = std::max(m, squared_distance_upper(p, c, e));
         }
         if (!best || m < *best) best = m;
       }
       if (best && *best > worst) worst = *best;
     }
-    r.max_distance_to_input = std::sqrt(CGAL::to_double(worst));
+    r.max_distance_to_input = std::sqrt(worst);
   }
   const double bound = 1e-3 * r.bbox_diagonal;
   r.hausdorff = detail::hausdorff_distance(input, written, bound);
