@@ -541,7 +541,9 @@ class Regularizer {
     if (CGAL::is_zero(n[k])) k = !CGAL::is_zero(n[0]) ? 0 : !CGAL::is_zero(n[1]) ? 1 : 2;
     const int i = kept_axes(k)[0], j = kept_axes(k)[1];
     CDT cdt;
+    std::unordered_map<Index, CDT::Vertex_handle> placed;  // points inserted where they are known to lie
     auto insert = [&](Index id) {
+      if (const auto it = placed.find(id); it != placed.end()) return it->second;
       const CDT::Vertex_handle h = cdt.insert(proj(points_[id], i, j));
       if (h->info().id < 0) h->info().id = id;
       return h;
@@ -559,6 +561,10 @@ class Regularizer {
       sign.push_back(int(CGAL::orientation(corners.back()[0], corners.back()[1], corners.back()[2])));
     }
     const auto t0 = std::chrono::steady_clock::now();
+    for (Index m : cluster)
+      for (Index u : partners_[m])
+        if (root(u) != root(m)) segment(m, u);
+    if (cluster.size() == 1) place_edge_points(cdt, t, i, j, placed);
     for (Index m : cluster)
       for (Index u : partners_[m]) {
         if (root(u) == root(m)) continue;  // the cluster's own edges are constraints already
@@ -728,6 +734,45 @@ class Regularizer {
     return true;
   }
 
+  /// Inserts the points known to lie on triangle t's edges (the crossings
+  /// named by edge_crossing) at their place: sorted along each edge and
+  /// split into it, so the triangulation never tests their (exactly zero)
+  /// orientation against the edge.
+  void place_edge_points(CDT& cdt, Index t, int i, int j, std::unordered_map<Index, CDT::Vertex_handle>& placed) {
+    const FaceView fv = soup_.face(t);
+    std::array<CDT::Vertex_handle, 3> corner;
+    for (auto h = cdt.finite_vertices_begin(); h != cdt.finite_vertices_end(); ++h)
+      for (int c = 0; c < 3; ++c)
+        if (h->info().id == std::int64_t(fv[c])) corner[c] = h;
+    for (int e = 0; e < 3; ++e) {
+      const auto it = on_edge_.find(edge_key(fv[e], fv[(e + 1) % 3]));
+      if (it == on_edge_.end()) continue;
+      std::vector<Index> pts = it->second;
+      std::sort(pts.begin(), pts.end());
+      pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+      // along the edge from corner e: by the coordinate that changes most
+      const EPoint &from = points_[fv[e]], &to = points_[fv[(e + 1) % 3]];
+      int axis = 0;
+      for (int a = 1; a < 3; ++a)
+        if (std::abs(CGAL::to_double(to[a] - from[a])) > std::abs(CGAL::to_double(to[axis] - from[axis]))) axis = a;
+      const bool up = CGAL::to_double(to[axis] - from[axis]) > 0;
+      std::sort(pts.begin(), pts.end(), [&](Index x, Index y) {
+        return up ? points_[x][axis] < points_[y][axis] : points_[y][axis] < points_[x][axis];
+      });
+      CDT::Vertex_handle prev = corner[e];
+      const CDT::Vertex_handle end = corner[(e + 1) % 3];
+      for (Index id : pts) {
+        CDT::Face_handle face;
+        int index = 0;
+        if (!cdt.is_edge(prev, end, face, index)) return;  // cannot happen; the general insert takes over
+        const CDT::Vertex_handle h = cdt.insert(proj(points_[id], i, j), CDT::EDGE, face, index);
+        if (h->info().id < 0) h->info().id = id;
+        placed.emplace(id, h);
+        prev = h;
+      }
+    }
+  }
+
   /// The point where edge pq crosses the plane of input face w (exact), by
   /// name: computed once per (edge, face).
   Index edge_crossing(Index p, Index q, Index w) {
@@ -738,6 +783,7 @@ class Regularizer {
     const EVector n = CGAL::cross_product(points_[wv[1]] - w0, points_[wv[2]] - w0);
     const K::FT dp = n * (P - w0), dq = n * (Q - w0);
     it->second = vertex_id(P + (Q - P) * (dp / (dp - dq)));
+    on_edge_[edge_key(p, q)].push_back(it->second);
     return it->second;
   }
 
@@ -771,6 +817,7 @@ class Regularizer {
     }
   };
   std::unordered_map<std::pair<std::uint64_t, Index>, Index, PairHash> crossings_;  // (edge, face) -> point
+  std::unordered_map<std::uint64_t, std::vector<Index>> on_edge_;                   // input edge -> its crossings
   std::vector<Index> cluster_;                                          // union-find over coplanar overlaps
   std::unordered_map<Index, std::vector<Index>> members_;              // cluster root -> its faces (2 or more)
 
