@@ -90,9 +90,12 @@ Soup annulus_prism(int n, double outer, double inner, double h) {
   return s;
 }
 
+/// Writes the output to scratch(`name`), reads it back (the tests check the
+/// file), and asks TetGen, the user's next step, whether it meshes it.
 Soup written(const OffsetResult& result, const std::string& name) {
   const std::string p = test::scratch(name);
   write_soup(result.soup, p);
+  if (result.soup.face_count() > 0) CHECK(test::tetgen_meshes(p, "tet_" + name));
   return read_soup(p);
 }
 
