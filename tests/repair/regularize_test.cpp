@@ -233,6 +233,19 @@ TEST_CASE("regularize: where the union's boundary pinches, each cone gets its ow
   CHECK(rep.signed_volume > 3 - 3 * 2 * 0.01);
 }
 
+TEST_CASE("regularize: where the union's boundary touches itself along an edge, the sheets come apart") {
+  // two boxes sharing one edge (welded: a non-manifold edge with four faces)
+  const Soup in = test::concat(box({{{0, 0, 0}, {1, 1, 1}}}), box({{{1, 1, 0}, {2, 3, 1}}}));
+  REQUIRE(inspect(in).nonmanifold_edges.size() == 1);
+  const RegularizeResult r = regularize(in);
+  const Report rep = inspect(written(r, "regularize_touching_edge.off"));
+  CHECK(rep.certified_clean());
+  CHECK(rep.components == 2);
+  CHECK(r.report.pinches_split == 2);  // the edge's two ends, each split per sheet
+  CHECK(rep.signed_volume < 3);
+  CHECK(rep.signed_volume > 3 - 2 * 2 * 2 * 0.01);
+}
+
 TEST_CASE("regularize: quad faces are fanned, and the output names the quad each face came from") {
   auto quad_box = [](const Box& b) {
     const auto& [lo, hi] = b;

@@ -861,9 +861,63 @@ void snap_rounded(RegularizeResult& result, std::vector<char>& made, RegularizeR
   made = std::move(out_made);
 }
 
+/// The faces around edge ab (three or more) paired into sheets: sorted by
+/// angle around the edge (exact predicates on the doubles), each face
+/// running b -> a with the next one, across the wedge inside both (a face
+/// running a -> b has its normal towards increasing angle). Empty when the
+/// faces do not alternate that way (coincident faces, say).
+std::vector<std::pair<Index, Index>> pair_sheets(const Soup& s, Index a, Index b, const std::vector<Index>& faces) {
+  auto ip = [&](Index v) { return IK::Point_3(s.points[v][0], s.points[v][1], s.points[v][2]); };
+  const IK::Point_3 A = ip(a), B = ip(b);
+  struct Item {
+    Index face;
+    IK::Point_3 c;
+    bool forward;  // runs a -> b
+    int half;      // -1: the reference; 0: (0, pi); 1: pi; 2: (pi, 2 pi)
+  };
+  std::vector<Item> items;
+  for (Index f : faces) {
+    const FaceView v = s.face(f);
+    Index third = v[0];
+    bool forward = false;
+    for (int k = 0; k < 3; ++k) {
+      if (v[k] != a && v[k] != b) third = v[k];
+      if (v[k] == a && v[(k + 1) % 3] == b) forward = true;
+    }
+    items.push_back({f, ip(third), forward, 0});
+  }
+  items[0].half = -1;
+  for (std::size_t k = 1; k < items.size(); ++k) {
+    const CGAL::Orientation o = CGAL::orientation(A, B, items[0].c, items[k].c);
+    if (o == CGAL::POSITIVE) items[k].half = 0;
+    else if (o == CGAL::NEGATIVE) items[k].half = 2;
+    else if (CGAL::coplanar_orientation(A, B, items[0].c, items[k].c) == CGAL::POSITIVE) return {};  // coincident
+    else items[k].half = 1;
+  }
+  bool tie = false;
+  std::sort(items.begin(), items.end(), [&](const Item& x, const Item& y) {
+    if (x.half != y.half) return x.half < y.half;
+    if (x.half == -1 || x.half == 1) return false;
+    const CGAL::Orientation o = CGAL::orientation(A, B, x.c, y.c);
+    if (o == CGAL::COPLANAR) tie = true;
+    return o == CGAL::POSITIVE;
+  });
+  if (tie) return {};
+  std::vector<std::pair<Index, Index>> sheets;
+  const std::size_t n = items.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    if (items[k].forward) continue;
+    const Item& next = items[(k + 1) % n];
+    if (!next.forward) return {};
+    sheets.push_back({items[k].face, next.face});
+  }
+  return 2 * sheets.size() == n ? sheets : std::vector<std::pair<Index, Index>>{};
+}
+
 /// The union's boundary can pinch: at a vertex where two of its cones touch
 /// (two faces sharing the vertex fold through each other, so the valid
-/// sectors around it meet only there), the exact result is not a 2-manifold.
+/// sectors around it meet only there), or along edges where it touches
+/// itself (pair_sheets), the exact result is not a 2-manifold.
 /// Each cone gets its own copy of the vertex, moved into its cone by 1% of
 /// its shortest edge there: the cones come apart, the surface moves by that
 /// much (reported as the distance to the input), and the changed faces are
@@ -905,9 +959,26 @@ void split_pinches(const Soup& input, bool input_manifold, RegularizeResult& res
     const FaceView fv = s.face(f);
     return Index(3 * f + (fv[0] == v ? 0 : fv[1] == v ? 1 : 2));
   };
-  for (std::size_t k = 1; k < uses.size(); ++k)
-    if (uses[k][0] == uses[k - 1][0] && uses[k][1] == uses[k - 1][1])
-      parent[find(corner(uses[k][2], uses[k][0]))] = find(corner(uses[k - 1][2], uses[k][0]));
+  for (std::size_t k = 0; k < uses.size();) {
+    std::size_t m = k;
+    while (m < uses.size() && uses[m][0] == uses[k][0] && uses[m][1] == uses[k][1]) ++m;
+    const Index v = uses[k][0];
+    if (m - k > 2) {
+      // a non-manifold edge: the union's boundary touches itself along it;
+      // each solid's two faces there (around its inside wedge) form one
+      // sheet, so the sheets come apart like the cones of a pinch
+      std::vector<Index> faces;
+      for (std::size_t q = k; q < m; ++q) faces.push_back(uses[q][2]);
+      const auto sheets = pair_sheets(s, v, uses[k][1], faces);
+      if (!sheets.empty()) {
+        for (const auto& [f, g] : sheets) parent[find(corner(f, v))] = find(corner(g, v));
+        k = m;
+        continue;
+      }
+    }
+    for (std::size_t q = k + 1; q < m; ++q) parent[find(corner(uses[q][2], v))] = find(corner(uses[k][2], v));
+    k = m;
+  }
   // per vertex, its cones (roots)
   std::map<Index, std::map<Index, std::vector<Index>>> cones;  // vertex -> root -> corners
   {
