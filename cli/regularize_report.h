@@ -53,6 +53,7 @@ inline nlohmann::json regularize_json(const RepairFiles& a, const RegularizeRepo
         {"vertices", r.vertices},
         {"components", r.components_in},
         {"polygons_fanned", r.polygons_fanned},
+        {"zero_area_faces", r.zero_area_faces},
         {"intersecting_pairs", r.intersecting_pairs_in},
         {"intersecting_faces", r.intersecting_faces_in}}},
       {"triangles",
@@ -109,6 +110,9 @@ inline void print_regularize_text(const RepairFiles& a, const RegularizeReport& 
               r.valid, r.partially_valid, r.invalid, r.triangles_split, r.sub_triangles, r.split_unreached);
   std::printf("  %zu intersection segments; %zu seeds, %zu winding-number lines\n", r.segments, r.seeds,
               r.line_casts);
+  if (r.zero_area_faces)
+    std::printf("  %zu zero-area faces left out (they bound nothing; T-junctions they closed are split)\n",
+                r.zero_area_faces);
   if (r.polygons_fanned)
     std::printf("  %zu polygons fanned into triangles (counts below are of triangles)\n",
                 r.polygons_fanned);

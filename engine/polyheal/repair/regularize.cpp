@@ -97,8 +97,16 @@ class Regularizer {
       partners_[b].push_back(a);
       if (coplanar(a, b)) cluster_[root(a)] = root(b);
     };
-    for (const FacePair& p : pairs) join(Index(p.first), Index(p.second));
-    for (const auto& d : report.duplicate_faces) join(Index(d[0]), Index(d[1]));
+    // §3.1: zero-area faces (exactly collinear, or a repeated corner) bound
+    // nothing; they stay out of every pair, piece and line (their edges
+    // still count for the closed-surface check, and a neighbour that meets
+    // one's middle corner at a T-junction is split there as an intersection)
+    zero_area_.assign(soup.face_count(), 0);
+    for (std::size_t f : report.degenerate_faces) zero_area_[f] = 1;
+    for (const FacePair& p : pairs)
+      if (!zero_area_[p.first] && !zero_area_[p.second]) join(Index(p.first), Index(p.second));
+    for (const auto& d : report.duplicate_faces)
+      if (!zero_area_[d[0]] && !zero_area_[d[1]]) join(Index(d[0]), Index(d[1]));
     for (auto& list : partners_) {
       std::sort(list.begin(), list.end());
       list.erase(std::unique(list.begin(), list.end()), list.end());
@@ -111,6 +119,10 @@ class Regularizer {
     for (std::size_t f = 0; f < soup.face_count(); ++f) {
       const FaceView fv = soup.face(f);
       pieces_.push_back({{fv[0], fv[1], fv[2]}, Index(f)});
+      if (zero_area_[f]) {
+        pieces_.back().alive = false;
+        pieces_.back().state = kInvalid;
+      }
       for (int e = 0; e < 3; ++e) face_edges_.push_back({edge_key(fv[e], fv[(e + 1) % 3]), Index(f)});
     }
     std::sort(face_edges_.begin(), face_edges_.end());
@@ -304,7 +316,7 @@ class Regularizer {
     int winding = 0;
     for (const auto& hit : hits) {
       const Index g = Index(hit - triangles_.begin());
-      if (g == source) continue;
+      if (g == source || zero_area_[g]) continue;
       const FaceView gv = soup_.face(g);
       std::array<IK::Point_2, 3> c;
       for (int e = 0; e < 3; ++e) c[e] = IK::Point_2(soup_.points[gv[e]][i], soup_.points[gv[e]][j]);
@@ -818,6 +830,7 @@ class Regularizer {
   };
   std::unordered_map<std::pair<std::uint64_t, Index>, Index, PairHash> crossings_;  // (edge, face) -> point
   std::unordered_map<std::uint64_t, std::vector<Index>> on_edge_;                   // input edge -> its crossings
+  std::vector<char> zero_area_;                                         // per input face (§3.1)
   std::vector<Index> cluster_;                                          // union-find over coplanar overlaps
   std::unordered_map<Index, std::vector<Index>> members_;              // cluster root -> its faces (2 or more)
 
@@ -1104,10 +1117,7 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
                                " more times in one direction than in the other: the surface is not closed "
                                "and consistently oriented, which regularize needs");
   }
-  if (!in.degenerate_faces.empty())
-    throw UnsupportedInput(std::to_string(in.degenerate_faces.size()) + " zero-area faces (first: face " +
-                           std::to_string(in.degenerate_faces.front()) +
-                           "); remove them first (polyheal degenerate), §3.1");
+  r.zero_area_faces = in.degenerate_faces.size();
   r.faces = in.faces;
   r.vertices = raw.points.size();
   r.intersecting_pairs_in = in.self_intersections.size();
@@ -1164,8 +1174,12 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
     d.certify = false;
     try {
       DeintersectResult fixed = remove_self_intersections(result.soup, d);
-      r.rounding_moves = fixed.report.moved_vertices;
-      result.soup = std::move(fixed.soup);
+      // its faces are the input's, in order, when it kept them all (the
+      // provenance depends on it); otherwise the passes below take over
+      if (fixed.soup.face_count() == result.soup.face_count()) {
+        r.rounding_moves = fixed.report.moved_vertices;
+        result.soup = std::move(fixed.soup);
+      }
     } catch (const UnsupportedInput&) {
       // not a manifold mesh: the next pass or the certificate deals with it
     }
@@ -1236,11 +1250,20 @@ void certify(const Soup& input, const Soup& written, const std::vector<std::size
   if (source_face.size() == written.face_count()) {
     double worst = 0;
     auto e = [](const Point3d& q) { return EPoint(q[0], q[1], q[2]); };
-    for (std::size_t f = 0; f < written.face_count(); ++f) {
-      // the source polygon's fan triangle that bounds this face best (one
+    // Candidate sources of a face: its own and its edge neighbours' (a swap
+    // in the rounding repair re-connects two faces across their sources).
+    std::vector<std::pair<std::uint64_t, Index>> edges;
+    for (std::size_t f = 0; f < written.face_count(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const Index a = written.face(f)[k], b = written.face(f)[(k + 1) % 3];
+        edges.push_back({(std::uint64_t(std::min(a, b)) << 32) | std::max(a, b), Index(f)});
+      }
+    std::sort(edges.begin(), edges.end());
+    auto bound_by = [&](std::size_t f, std::size_t src) {
+      // the source polygon's fan triangle that bounds face f best (one
       // triangle for a triangle)
-      const FaceView s = input.face(source_face[f]);
-      const std::size_t n = s.size(), a = n > 3 ? fan_apex(input, source_face[f]) : 0;
+      const FaceView s = input.face(src);
+      const std::size_t n = s.size(), a = n > 3 ? fan_apex(input, src) : 0;
       std::optional<double> best;
       for (std::size_t k = 1; k + 1 < n; ++k) {
         const std::array<Point3d, 3> c{input.points[s[a]], input.points[s[(a + k) % n]],
@@ -1253,7 +1276,18 @@ void certify(const Soup& input, const Soup& written, const std::vector<std::size
         }
         if (!best || m < *best) best = m;
       }
-      if (best && *best > worst) worst = *best;
+      return best ? *best : 0.0;
+    };
+    for (std::size_t f = 0; f < written.face_count(); ++f) {
+      double best = bound_by(f, source_face[f]);
+      for (int k = 0; k < 3 && best > 0; ++k) {
+        const Index a = written.face(f)[k], b = written.face(f)[(k + 1) % 3];
+        const std::uint64_t key = (std::uint64_t(std::min(a, b)) << 32) | std::max(a, b);
+        for (auto it = std::lower_bound(edges.begin(), edges.end(), std::make_pair(key, Index(0)));
+             it != edges.end() && it->first == key && best > 0; ++it)
+          if (it->second != f) best = std::min(best, bound_by(f, source_face[it->second]));
+      }
+      worst = std::max(worst, best);
     }
     r.max_distance_to_input = std::sqrt(worst);
   }

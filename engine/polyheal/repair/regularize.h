@@ -4,8 +4,10 @@
 // `polyheal regularize`, stage by stage (the paper's Fig. 3):
 //   1. detect     the input must be a closed, consistently oriented triangle
 //                 mesh (several components, overlapping each other, are the
-//                 point). Exactly zero-area faces are refused (§3.1: run
-//                 `polyheal degenerate` first). Which faces intersect is
+//                 point). Exactly zero-area faces are left out (§3.1): they
+//                 bound nothing, and the neighbour across one that closes a
+//                 T-junction meets its middle corner, an intersection the
+//                 sub-triangulation splits it at. Which faces intersect is
 //                 decided by the oracle's global pass (exact predicates on the
 //                 doubles, cheap); the intersection *segments* are constructed
 //                 lazily (below).
@@ -82,6 +84,7 @@ struct RegularizeOptions {
 struct RegularizeReport {
   // input
   std::size_t faces = 0, vertices = 0, components_in = 0;
+  std::size_t zero_area_faces = 0;     // left out (§3.1): they bound nothing
   std::size_t polygons_fanned = 0;     // input faces with more than 3 corners, fanned into triangles
   std::size_t intersecting_pairs_in = 0, intersecting_faces_in = 0;
   double bbox_diagonal = 0;
@@ -124,8 +127,8 @@ struct RegularizeResult {
 /// Stages 1-3, the repair of what rounding broke, and, with
 /// options.certify, stage 4 on the rounded result. Throws UnsupportedInput
 /// for an input that is not a closed, consistently oriented triangle mesh
-/// (every edge used as often in each direction) or has zero-area faces. An
-/// input facing inwards everywhere encloses nothing: the output is empty.
+/// (every edge used as often in each direction). An input facing inwards
+/// everywhere encloses nothing: the output is empty.
 RegularizeResult regularize(const Soup& input, const RegularizeOptions& options = {});
 
 /// Stage 4 on `written` (the output as read back; `input` as given): fills the
