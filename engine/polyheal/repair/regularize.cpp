@@ -1278,9 +1278,12 @@ void certify(const Soup& input, const Soup& written, const std::vector<std::size
       }
       return best ? *best : 0.0;
     };
+    // neighbours are tried only when the own source does not bound the face
+    // at rounding level (a swapped face, in practice)
+    const double rounding_level = std::pow(1e-9 * r.bbox_diagonal, 2);
     for (std::size_t f = 0; f < written.face_count(); ++f) {
       double best = bound_by(f, source_face[f]);
-      for (int k = 0; k < 3 && best > 0; ++k) {
+      for (int k = 0; k < 3 && best > rounding_level; ++k) {
         const Index a = written.face(f)[k], b = written.face(f)[(k + 1) % 3];
         const std::uint64_t key = (std::uint64_t(std::min(a, b)) << 32) | std::max(a, b);
         for (auto it = std::lower_bound(edges.begin(), edges.end(), std::make_pair(key, Index(0)));
