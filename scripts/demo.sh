@@ -41,3 +41,17 @@ set +e
 code=$?
 set -e
 echo "(exit code $code)"
+echo
+echo "\$ polyheal regularize fixtures/knot_tube_r1.2.off -o build/demo_knot.off --overwrite"
+set +e
+"$ph" regularize "$root/fixtures/knot_tube_r1.2.off" -o "$root/build/demo_knot.off" --overwrite
+code=$?
+set -e
+echo "(exit code $code: 0 certified, 1 defects remain (listed), 2 error)"
+echo
+echo "\$ polyheal offset fixtures/thingi10k_65004.stl -d 0.69 -o build/demo_offset.off --overwrite"
+set +e
+"$ph" offset "$root/fixtures/thingi10k_65004.stl" -d 0.69 -o "$root/build/demo_offset.off" --overwrite
+code=$?
+set -e
+echo "(exit code $code)"
