@@ -40,19 +40,7 @@ void add_regularize(CLI::App& app, int& exit_code) {
     TtyProgress progress;
     double read_s = 0;
     const Soup soup = read_repair_input(*args, progress, read_s);
-    RegularizeOptions options;
-    options.observer = &progress;
-    options.certify = false;  // certified below, on the file as written
-    RegularizeResult result = run_repair(*args, [&] { return regularize(soup, options); });
-    RegularizeReport& r = result.report;
-    finish_repair(
-        result.soup, *args, progress, r.seconds_certify,
-        [&](const Soup& written) {
-          certify(soup, written, result.source_face, r);
-          return r.certified;
-        },
-        [&] { return regularize_json(*args, r, read_s, r.seconds_certify); },
-        [&] { print_regularize_text(*args, r); }, exit_code);
+    regularize_and_report(soup, *args, progress, read_s, exit_code);
   });
 }
 

@@ -43,19 +43,7 @@ void add_union(CLI::App& app, int& exit_code) {
       args->input += (args->input.empty() ? "" : " + ") + in;
     }
     const double read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    RegularizeOptions options;
-    options.observer = &progress;
-    options.certify = false;  // certified below, on the file as written
-    RegularizeResult result = run_repair(*args, [&] { return regularize(all, options); });
-    RegularizeReport& r = result.report;
-    finish_repair(
-        result.soup, *args, progress, r.seconds_certify,
-        [&](const Soup& written) {
-          certify(all, written, result.source_face, r);
-          return r.certified;
-        },
-        [&] { return regularize_json(*args, r, read_s, r.seconds_certify); },
-        [&] { print_regularize_text(*args, r); }, exit_code);
+    regularize_and_report(all, *args, progress, read_s, exit_code);
   });
 }
 

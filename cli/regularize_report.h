@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "polyheal/repair/regularize.h"
+#include "progress.h"
 #include "repair_command.h"
 
 namespace polyheal::cli {
@@ -156,6 +157,25 @@ inline void print_regularize_text(const RepairFiles& a, const RegularizeReport& 
                 r.out.self_intersections[k].second);
   if (shown < r.out.self_intersections.size())
     std::printf("    ... and %zu more (--list)\n", r.out.self_intersections.size() - shown);
+}
+
+/// What `regularize` and `union` share after reading: regularize `soup`,
+/// write, read back and certify the file, print the report, set the exit code.
+inline void regularize_and_report(const Soup& soup, const RepairFiles& args, TtyProgress& progress, double read_s,
+                                  int& exit_code) {
+  RegularizeOptions options;
+  options.observer = &progress;
+  options.certify = false;  // certified below, on the file as written
+  RegularizeResult result = run_repair(args, [&] { return regularize(soup, options); });
+  RegularizeReport& r = result.report;
+  finish_repair(
+      result.soup, args, progress, r.seconds_certify,
+      [&](const Soup& written) {
+        certify(soup, written, result.source_face, r);
+        return r.certified;
+      },
+      [&] { return regularize_json(args, r, read_s, r.seconds_certify); },
+      [&] { print_regularize_text(args, r); }, exit_code);
 }
 
 }  // namespace polyheal::cli
