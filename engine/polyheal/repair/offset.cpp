@@ -158,6 +158,7 @@ class RawOffset {
     if (start == k) start = 0;
     std::size_t sharp_count = 0;
     for (std::size_t i = 0; i < k; ++i) sharp_count += sharp_[fan[i]] ? 1 : 0;
+    // fewer than two sharp edges: one sector, the whole fan (closed at `last`)
     std::uint32_t s = 0;
     Vec acc{0, 0, 0};
     for (std::size_t n = 0; n < k; ++n) {
@@ -172,17 +173,6 @@ class RawOffset {
         acc = {0, 0, 0};
         if (!last) ++s;
       }
-    }
-    if (sharp_count < 2) {  // one sector: the whole fan
-      sector_normal.assign(1, Vec{0, 0, 0});
-      Vec all{0, 0, 0};
-      for (std::uint32_t c : fan) {
-        const FaceView fv = in_.face(c / 3);
-        const Vec e1 = sub(in_.points[fv[(c % 3 + 1) % 3]], p), e2 = sub(in_.points[fv[(c % 3 + 2) % 3]], p);
-        all = add(all, mul(normal_[c / 3], angle(e1, e2)));
-        sector_[c] = 0;
-      }
-      sector_normal[0] = unit(all);
     }
     std::vector<Index> sector_point;
     for (const Vec& n : sector_normal) sector_point.push_back(add_point(add(p, mul(n, d_))));
