@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "polyheal/mesh/topology.h"
+#include "polyheal/mesh/union_find.h"
 #include "polyheal/mesh/weld.h"
 
 namespace polyheal {
@@ -44,12 +45,7 @@ Soup split_fans(const Soup& soup, const std::vector<Index>& pinched, std::size_t
   added = 0;
   for (Index v : pinched) {
     const std::vector<Corner>& cs = corners[v];
-    std::vector<std::size_t> parent(cs.size());
-    for (std::size_t i = 0; i < cs.size(); ++i) parent[i] = i;
-    auto find = [&](std::size_t i) {
-      while (parent[i] != i) i = parent[i] = parent[parent[i]];
-      return i;
-    };
+    UnionFind fans(cs.size());
     std::vector<std::pair<Index, std::size_t>> by_neighbour;  // (vertex next to v, corner)
     for (std::size_t i = 0; i < cs.size(); ++i) {
       const FaceView face = soup.face(cs[i].face);
@@ -60,12 +56,12 @@ Soup split_fans(const Soup& soup, const std::vector<Index>& pinched, std::size_t
     std::sort(by_neighbour.begin(), by_neighbour.end());
     for (std::size_t j = 1; j < by_neighbour.size(); ++j)
       if (by_neighbour[j].first == by_neighbour[j - 1].first)
-        parent[find(by_neighbour[j].second)] = find(by_neighbour[j - 1].second);
+        fans.unite(by_neighbour[j].second, by_neighbour[j - 1].second);
     std::vector<Index> copy(cs.size(), v);
     std::vector<char> named(cs.size(), 0);
     bool first = true;
     for (std::size_t i = 0; i < cs.size(); ++i) {
-      const std::size_t root = find(i);
+      const std::size_t root = fans.find(i);
       if (!named[root]) {
         named[root] = 1;
         if (first) {

@@ -4,24 +4,9 @@
 #include <cstdint>
 #include <numeric>
 
+#include "polyheal/mesh/union_find.h"
+
 namespace polyheal {
-namespace {
-
-struct UnionFind {
-  std::vector<std::size_t> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  std::size_t find(std::size_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(std::size_t a, std::size_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
-
-}  // namespace
 
 Topology analyze_topology(const Soup& soup) {
   Topology t;

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "polyheal/mesh/errors.h"
+#include "polyheal/mesh/union_find.h"
 #include "polyheal/repair/detail/distance.h"
 
 namespace polyheal {
@@ -292,12 +293,7 @@ void drop_pockets(const Soup& input, const Soup& raw, double inside, RegularizeR
   std::vector<char> drop(F, 0);
   const std::size_t before = r.pockets_removed;
   for (const bool by_vertex : {true, false}) {
-    std::vector<Index> parent(F);
-    std::iota(parent.begin(), parent.end(), Index(0));
-    auto find = [&](Index x) {
-      while (parent[x] != x) x = parent[x] = parent[parent[x]];
-      return x;
-    };
+    UnionFind components(F);
     std::vector<std::pair<std::uint64_t, Index>> keys;  // (vertex or edge, face)
     for (std::size_t f = 0; f < F; ++f) {
       if (drop[f]) continue;
@@ -309,11 +305,11 @@ void drop_pockets(const Soup& input, const Soup& raw, double inside, RegularizeR
     }
     std::sort(keys.begin(), keys.end());
     for (std::size_t k = 1; k < keys.size(); ++k)
-      if (keys[k].first == keys[k - 1].first) parent[find(keys[k].second)] = find(keys[k - 1].second);
-    std::map<Index, std::vector<double>> by_component;
+      if (keys[k].first == keys[k - 1].first) components.unite(keys[k].second, keys[k - 1].second);
+    std::map<std::size_t, std::vector<double>> by_component;
     for (std::size_t f = 0; f < F; ++f)
       if (!drop[f])
-        for (Index v : s.face(f)) by_component[find(Index(f))].push_back(vertex_distance[v]);
+        for (Index v : s.face(f)) by_component[components.find(f)].push_back(vertex_distance[v]);
     std::vector<char> drop_root(F, 0);
     for (auto& [root, d] : by_component) {
       std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() / 2), d.end());
@@ -323,7 +319,7 @@ void drop_pockets(const Soup& input, const Soup& raw, double inside, RegularizeR
       }
     }
     for (std::size_t f = 0; f < F; ++f)
-      if (!drop[f] && drop_root[find(Index(f))]) drop[f] = 1;
+      if (!drop[f] && drop_root[components.find(f)]) drop[f] = 1;
   }
   if (r.pockets_removed == before) return;
   Soup kept;

@@ -21,6 +21,7 @@
 #include "polyheal/mesh/convert.h"
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/mesh.h"
+#include "polyheal/mesh/union_find.h"
 #include "polyheal/mesh/weld.h"
 #include "polyheal/repair/deintersect.h"
 #include "polyheal/repair/detail/distance.h"
@@ -91,11 +92,10 @@ class Regularizer {
     // Coplanar overlaps (and duplicate faces) join their triangles into one
     // cluster, sub-triangulated together so that coincident pieces are one
     // piece standing for all the sheets there (its weight).
-    std::iota(cluster_.begin(), cluster_.end(), Index(0));
     auto join = [&](Index a, Index b) {
       partners_[a].push_back(b);
       partners_[b].push_back(a);
-      if (coplanar(a, b)) cluster_[root(a)] = root(b);
+      if (coplanar(a, b)) cluster_.unite(a, b);
     };
     // §3.1: zero-area faces (exactly collinear, or a repeated corner) bound
     // nothing; they stay out of every pair, piece and line (their edges
@@ -194,19 +194,14 @@ class Regularizer {
       else if (split_[f]) ++r_.partially_valid;
       else ++r_.valid;
     }
-    // components through shared edges (union-find)
-    std::vector<Index> parent(faces);
-    std::iota(parent.begin(), parent.end(), Index(0));
-    auto find = [&](Index x) {
-      while (parent[x] != x) x = parent[x] = parent[parent[x]];
-      return x;
-    };
+    // components through shared edges
+    UnionFind components(faces);
     for (std::size_t k = 1; k < face_edges_.size(); ++k)
       if (face_edges_[k].first == face_edges_[k - 1].first)
-        parent[find(face_edges_[k].second)] = find(face_edges_[k - 1].second);
+        components.unite(face_edges_[k].second, face_edges_[k - 1].second);
     std::vector<char> root_kept(faces, 0), root_seen(faces, 0);
     for (std::size_t f = 0; f < faces; ++f) {
-      const Index root = find(Index(f));
+      const std::size_t root = components.find(f);
       root_seen[root] = 1;
       if (has_valid[f]) root_kept[root] = 1;
     }
@@ -222,10 +217,7 @@ class Regularizer {
  private:
   // ---- clusters of coplanar overlapping triangles ------------------------
 
-  Index root(Index f) {
-    while (cluster_[f] != f) f = cluster_[f] = cluster_[cluster_[f]];
-    return f;
-  }
+  Index root(Index f) { return Index(cluster_.find(f)); }
 
   /// Are input faces a and b in one plane (exactly, on the doubles)?
   bool coplanar(Index a, Index b) const {
@@ -831,7 +823,7 @@ class Regularizer {
   std::unordered_map<std::pair<std::uint64_t, Index>, Index, PairHash> crossings_;  // (edge, face) -> point
   std::unordered_map<std::uint64_t, std::vector<Index>> on_edge_;                   // input edge -> its crossings
   std::vector<char> zero_area_;                                         // per input face (§3.1)
-  std::vector<Index> cluster_;                                          // union-find over coplanar overlaps
+  UnionFind cluster_;                                                   // over coplanar overlaps
   std::unordered_map<Index, std::vector<Index>> members_;              // cluster root -> its faces (2 or more)
 
   InputTriangles triangles_;
@@ -961,13 +953,8 @@ void split_pinches(const Soup& input, bool input_manifold, RegularizeResult& res
       uses.push_back({v, s.face(f)[(k + 2) % 3], Index(f)});
     }
   std::sort(uses.begin(), uses.end());
-  // union-find over (vertex, face) corners: index 3f + corner
-  std::vector<Index> parent(3 * F);
-  std::iota(parent.begin(), parent.end(), Index(0));
-  auto find = [&](Index x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  // cones as sets of (vertex, face) corners: index 3f + corner
+  UnionFind cone(3 * F);
   auto corner = [&](Index f, Index v) {
     const FaceView fv = s.face(f);
     return Index(3 * f + (fv[0] == v ? 0 : fv[1] == v ? 1 : 2));
@@ -984,12 +971,12 @@ void split_pinches(const Soup& input, bool input_manifold, RegularizeResult& res
       for (std::size_t q = k; q < m; ++q) faces.push_back(uses[q][2]);
       const auto sheets = pair_sheets(s, v, uses[k][1], faces);
       if (!sheets.empty()) {
-        for (const auto& [f, g] : sheets) parent[find(corner(f, v))] = find(corner(g, v));
+        for (const auto& [f, g] : sheets) cone.unite(corner(f, v), corner(g, v));
         k = m;
         continue;
       }
     }
-    for (std::size_t q = k + 1; q < m; ++q) parent[find(corner(uses[q][2], v))] = find(corner(uses[k][2], v));
+    for (std::size_t q = k + 1; q < m; ++q) cone.unite(corner(uses[q][2], v), corner(uses[k][2], v));
     k = m;
   }
   // per vertex, its cones (roots)
@@ -1000,13 +987,13 @@ void split_pinches(const Soup& input, bool input_manifold, RegularizeResult& res
     for (std::size_t c = 0; c < 3 * F; ++c) {
       const Index v = s.face(c / 3)[c % 3];
       if (!candidate[v]) continue;
-      const Index root = find(Index(c));
+      const Index root = Index(cone.find(c));
       if (first_root[v] == ~Index(0)) first_root[v] = root;
       else if (first_root[v] != root) pinched[v] = 1;
     }
     for (std::size_t c = 0; c < 3 * F; ++c) {
       const Index v = s.face(c / 3)[c % 3];
-      if (candidate[v] && pinched[v]) cones[v][find(Index(c))].push_back(Index(c));
+      if (candidate[v] && pinched[v]) cones[v][Index(cone.find(c))].push_back(Index(c));
     }
   }
   for (auto& [v, by_root] : cones) {
