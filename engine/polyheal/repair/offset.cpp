@@ -342,11 +342,8 @@ void drop_pockets(const Soup& input, const Soup& raw, double inside, RegularizeR
     }
     kept.add_triangle(t[0], t[1], t[2]);
     source.push_back(reg.source_face[f]);
-    const FaceView src = raw.face(reg.source_face[f]);
-    bool same = true;
-    for (int k = 0; k < 3 && same; ++k) same = raw.points[src[k]] == kept.points[t[k]];
-    kept_faces += same ? 1 : 0;
   }
+  for (std::size_t f = 0; f < kept.face_count(); ++f) kept_faces += kept_as_input(raw, kept, source, f) ? 1 : 0;
   std::vector<Point3d> raw_points = raw.points;
   std::sort(raw_points.begin(), raw_points.end());
   std::size_t made = 0;

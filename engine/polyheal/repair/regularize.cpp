@@ -935,13 +935,9 @@ void split_pinches(const Soup& input, bool input_manifold, RegularizeResult& res
   // pinch (and any vertex, if the input itself is not a manifold).
   std::vector<char> candidate(s.points.size(), input_manifold ? 0 : 1);
   if (input_manifold)
-    for (std::size_t f = 0; f < F; ++f) {
-      const FaceView a = input.face(result.source_face[f]), b = s.face(f);
-      bool same = true;
-      for (int k = 0; k < 3 && same; ++k) same = input.points[a[k]] == s.points[b[k]];
-      if (!same)
-        for (Index v : b) candidate[v] = 1;
-    }
+    for (std::size_t f = 0; f < F; ++f)
+      if (!kept_as_input(input, s, result.source_face, f))
+        for (Index v : s.face(f)) candidate[v] = 1;
   // (vertex, other end of an edge at it, face): faces around a vertex that
   // share an edge there belong to one cone
   std::vector<std::array<Index, 3>> uses;
@@ -1051,6 +1047,14 @@ std::size_t fan_apex(const Soup& soup, std::size_t f) {
 
 }  // namespace
 
+bool kept_as_input(const Soup& input, const Soup& output, const std::vector<std::size_t>& source_face, std::size_t f) {
+  const FaceView a = input.face(source_face[f]), b = output.face(f);
+  if (a.size() != 3) return false;
+  for (int k = 0; k < 3; ++k)
+    if (input.points[a[k]] != output.points[b[k]]) return false;
+  return true;
+}
+
 RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   RegularizeResult result;
   RegularizeReport& r = result.report;
@@ -1138,12 +1142,8 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   r.new_vertices = std::size_t(std::count(made.begin(), made.end(), char(1)));
   r.faces_out = result.soup.face_count();
   r.vertices_out = result.soup.points.size();
-  for (std::size_t f = 0; f < result.soup.face_count(); ++f) {
-    const FaceView a = input.face(result.source_face[f]), b = result.soup.face(f);
-    bool same = true;
-    for (int k = 0; k < 3 && same; ++k) same = input.points[a[k]] == result.soup.points[b[k]];
-    r.faces_kept += same ? 1 : 0;
-  }
+  for (std::size_t f = 0; f < result.soup.face_count(); ++f)
+    r.faces_kept += kept_as_input(input, result.soup, result.source_face, f) ? 1 : 0;
   // Certify after rounding: a point on an intersection curve rounded to
   // doubles can make faces intersect again; deintersect's vertex moves (in
   // doubles) repair that where they can.

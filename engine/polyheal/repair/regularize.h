@@ -131,6 +131,10 @@ struct RegularizeResult {
 /// everywhere encloses nothing: the output is empty.
 RegularizeResult regularize(const Soup& input, const RegularizeOptions& options = {});
 
+/// Is output face f its source face (face source_face[f] of `input`),
+/// corner for corner, bit for bit?
+bool kept_as_input(const Soup& input, const Soup& output, const std::vector<std::size_t>& source_face, std::size_t f);
+
 /// Stage 4 on `written` (the output as read back; `input` as given): fills the
 /// certificate half of `report` (out, distances, certified). `source_face`
 /// is RegularizeResult::source_face.
