@@ -213,8 +213,9 @@ if want regularize; then
     /usr/bin/time -f "%e %M" -o "$work/time.txt" timeout 1200 "$b/polyheal" regularize --json --overwrite "$f" \
       -o "$work/reg_ours.off" > "$work/reg.json" 2>"$work/reg.err" || code=$?
     read -r ours_s ours_kb < <(tail -n 1 "$work/time.txt")
-    faces=$({ "$b/polyheal" check --json "$f" 2>/dev/null || true; } | sed -n 's/.*"faces": \([0-9]*\).*/\1/p' | head -1)
-    pairs=$({ "$b/polyheal" check --json "$f" 2>/dev/null || true; } | sed -n 's/.*"self_intersecting_pairs": \([0-9]*\).*/\1/p' | head -1)
+    { "$b/polyheal" check --json "$f" 2>/dev/null || true; } > "$work/reg_in.json"
+    faces=$(json_num faces "$work/reg_in.json")
+    pairs=$(json_num self_intersecting_pairs "$work/reg_in.json")
     if [ "$code" -ge 2 ]; then
       why=$(sed "s|.*$name: ||" "$work/reg.err" | head -1 | cut -c1-100)
       ours="refused: ${why:-error} | | | $ours_s s | —"
@@ -236,7 +237,7 @@ if want regularize; then
       read -r cg_wall cg_kb < <(tail -n 1 "$work/time.txt")
       cv=$(verdict "$work/reg_cgal.off")
       [ "$cv" = certified ] && reg_cgal=$((reg_cgal + 1))
-      cg_vol=$({ "$b/polyheal" check --json "$work/reg_cgal.off" 2>/dev/null || true; } | json_num signed_volume /dev/stdin)
+      cg_vol=$(json_num signed_volume "$work/verdict.json")  # verdict() just checked this file
       vol="—"
       [ -n "$ours_vol" ] && [ -n "$cg_vol" ] && vol=$(awk -v a="$ours_vol" -v c="$cg_vol" 'BEGIN{d = a - c; if (d < 0) d = 0 - d; m = c < 0 ? 0 - c : c; printf "%.6g (%.1g)", a, (m > 0 ? d / m : d)}')
       peer="$cv | $cg_faces | $vol | $cg_wall s ($cg_s s), $((cg_kb / 1024)) MB | $(tetgen_verdict "$work/reg_cgal.off")"
