@@ -25,4 +25,7 @@ void add_offset(CLI::App& app, int& exit_code);
 /// Adds `union` (Boolean union of closed meshes by regularization).
 void add_union(CLI::App& app, int& exit_code);
 
+/// Adds `rebuild` (Hu, Lee, Blacker & Zhu overlay-grid cleanup).
+void add_rebuild(CLI::App& app, int& exit_code);
+
 }  // namespace polyheal::cli

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   add_regularize(app, exit_code);
   add_offset(app, exit_code);
   add_union(app, exit_code);
+  add_rebuild(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -22,15 +22,15 @@ struct RepairFiles {
   bool json = false, list = false, ascii = false, overwrite = false;
 };
 
-/// IN, -o, --json (naming `schema`), --list (`list_help`), --ascii, --overwrite.
-inline void add_repair_files(CLI::App* cmd, RepairFiles& f, const std::string& schema, const std::string& list_help) {
-  cmd->add_option("IN", f.input,
-                  "input mesh (.off, .obj, .stl, .ply): an oriented 2-manifold, open or closed (pinch vertices "
-                  "allowed)")
-      ->required();
+/// IN (`in_help`), -o, --json (naming `schema`), --list (`list_help`; none
+/// when empty), --ascii, --overwrite.
+inline void add_repair_files(CLI::App* cmd, RepairFiles& f, const std::string& schema, const std::string& list_help,
+                             const std::string& in_help = "input mesh (.off, .obj, .stl, .ply): an oriented "
+                                                          "2-manifold, open or closed (pinch vertices allowed)") {
+  cmd->add_option("IN", f.input, in_help)->required();
   cmd->add_option("-o,--output", f.output, "output mesh; format from the extension")->required();
   cmd->add_flag("--json", f.json, "print one JSON document (schema " + schema + ", see README)");
-  cmd->add_flag("--list", f.list, list_help);
+  if (!list_help.empty()) cmd->add_flag("--list", f.list, list_help);
   cmd->add_flag("--ascii", f.ascii, "STL/PLY output in ASCII");
   cmd->add_flag("--overwrite", f.overwrite, "replace an existing output file (never the input)");
 }

@@ -127,5 +127,28 @@ grep_out "volume 13.375, 1 components" "$tmp/out" "union encloses 8 + 8 - 2.625"
 expect 0 "union output checks clean" -- "$bin" check "$tmp/union.off"
 expect 2 "union needs two inputs" -- "$bin" union "$tmp/cube.off" -o "$tmp/u2.off"
 expect 2 "union never writes over an input" -- "$bin" union "$tmp/cube.off" "$tmp/cube_b.off" -o "$tmp/cube_b.off" --overwrite
+# polyheal rebuild
+expect 0 "rebuild closes the dirty box" -- "$bin" rebuild "$src/fixtures/dirty_box.obj" -o "$tmp/box_rebuilt.obj"
+grep_out "CERTIFIED: closed" "$tmp/out" "rebuild reports the certificate"
+grep_out "interpolated across" "$tmp/out" "rebuild reports the gap and hole fills"
+expect 0 "rebuild output checks clean" -- "$bin" check "$tmp/box_rebuilt.obj"
+grep -q "^g face" "$tmp/box_rebuilt.obj" && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: rebuild OBJ has no face groups"; }
+expect 0 "rebuild --json --cell" -- "$bin" rebuild --json --cell 2% "$src/fixtures/dirty_box.obj" -o "$tmp/box_rebuilt2.off"
+grep_out '"schema": "polyheal.rebuild/1"' "$tmp/out" "rebuild json schema tag"
+grep_out '"cell_rule": "--cell, relative to the diagonal"' "$tmp/out" "rebuild --cell in percent"
+printf 'OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n' > "$tmp/sheet.off"
+expect 1 "rebuild invents no volume for an open sheet" -- "$bin" rebuild "$tmp/sheet.off" -o "$tmp/sheet_out.off"
+grep_out "encloses no volume" "$tmp/out" "rebuild says the sheet encloses nothing"
+expect 0 "rebuild keeps a clean input" -- "$bin" rebuild "$src/fixtures/torus.off" -o "$tmp/torus_same.off"
+grep_out "written unchanged" "$tmp/out" "rebuild says the clean input is unchanged"
+expect 2 "rebuild malformed input" -- "$bin" rebuild "$tmp/bad.off" -o "$tmp/rb.off"
+[ "$(wc -l < "$tmp/err")" -eq 1 ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: rebuild error is not one line"; }
+[ ! -e "$tmp/rb.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: rebuild wrote output on error"; }
+expect 2 "rebuild rejects a bad --cell" -- "$bin" rebuild "$src/fixtures/dirty_box.obj" --cell -1 -o "$tmp/rb.off"
+expect 2 "rebuild refuses a grid beyond the limit" -- "$bin" rebuild "$src/fixtures/dirty_box.obj" --cell 0.00001 -o "$tmp/rb.off"
+grep_out "choose a larger --cell" "$tmp/err" "rebuild says how to fix the grid size"
+expect 2 "rebuild never writes over its input" -- "$bin" rebuild "$tmp/sheet.off" -o "$tmp/sheet.off" --overwrite
+expect 0 "rebuild help" -- "$bin" rebuild --help
+grep_out "winding" "$tmp/out" "rebuild help explains the classification"
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -223,7 +223,7 @@ double SurfaceDistance::squared_distance(const Point3d& p) const {
   return impl_->tree.squared_distance(point(p));
 }
 
-double hausdorff_distance(const Soup& a, const Soup& b, double error_bound) {
+std::array<double, 2> one_sided_distances(const Soup& a, const Soup& b, double error_bound) {
   // A triangle present in both soups is at distance 0 from the other, so
   // each direction needs only the triangles the other soup lacks: a repair
   // that changed little is measured in time proportional to what it changed.
@@ -234,10 +234,15 @@ double hausdorff_distance(const Soup& a, const Soup& b, double error_bound) {
   std::vector<Corners> only_a, only_b;
   std::set_difference(sa.begin(), sa.end(), sb.begin(), sb.end(), std::back_inserter(only_a));
   std::set_difference(sb.begin(), sb.end(), sa.begin(), sa.end(), std::back_inserter(only_b));
-  if ((ta.empty() && !only_b.empty()) || (tb.empty() && !only_a.empty())) return -1.0;
+  if ((ta.empty() && !only_b.empty()) || (tb.empty() && !only_a.empty())) return {-1.0, -1.0};
   const double ab = only_a.empty() ? 0.0 : one_sided(only_a, SurfaceDistance(tb), error_bound);
   const double ba = only_b.empty() ? 0.0 : one_sided(only_b, SurfaceDistance(ta), error_bound);
-  return std::max(ab, ba);
+  return {ab, ba};
+}
+
+double hausdorff_distance(const Soup& a, const Soup& b, double error_bound) {
+  const std::array<double, 2> d = one_sided_distances(a, b, error_bound);
+  return std::max(d[0], d[1]);
 }
 
 }  // namespace polyheal::detail

@@ -66,4 +66,8 @@ double squared_distance_to_triangle(const Point3d& p, const Point3d& a, const Po
 /// empty and the other is not (not measured).
 double hausdorff_distance(const Soup& a, const Soup& b, double error_bound);
 
+/// The two one-sided distances of hausdorff_distance: {from a to b, from b
+/// to a} (how far a point of a can be from b, and the other way round).
+std::array<double, 2> one_sided_distances(const Soup& a, const Soup& b, double error_bound);
+
 }  // namespace polyheal::detail
