@@ -63,6 +63,7 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
       {"hausdorff_error_bound", r.hausdorff_error_bound},
       {"input_to_output", r.input_to_output},
       {"output_to_input", r.output_to_input},
+      {"lost", {{"faces", r.lost_faces}, {"components", r.lost_components}, {"area_fraction", r.lost_area_fraction}}},
       {"hausdorff_cells", r.cell > 0 && r.hausdorff >= 0 ? r.hausdorff / r.cell : -1},
       {"seconds",
        {{"read", read_s},
@@ -108,13 +109,18 @@ void print_text(const RebuildArgs& a, const RebuildReport& r) {
                 "to input %g (gap and hole fills)\n",
                 r.hausdorff, r.hausdorff_error_bound, r.cell > 0 ? r.hausdorff / r.cell : 0.0, r.input_to_output,
                 r.output_to_input);
+  if (r.lost_faces)
+    std::printf("  %zu input faces (%.3g%% of the area) are farther than two cells from the output: they enclose no "
+                "volume (open sheets, fins, inner walls)%s\n",
+                r.lost_faces, 100 * r.lost_area_fraction,
+                r.lost_components ? (", " + std::to_string(r.lost_components) + " whole components LOST").c_str() : "");
   if (r.certified)
     std::printf("  => CERTIFIED: closed, 2-manifold, oriented, no degenerate face, no self-intersection\n");
   else
     std::printf("  => NOT CERTIFIED: closed %s, manifold %s, oriented %s, %zu self-intersecting pairs, %zu "
-                "degenerate faces\n",
+                "degenerate faces, %zu input components lost\n",
                 r.closed ? "yes" : "no", r.manifold ? "yes" : "no", r.oriented ? "yes" : "no", r.self_intersections,
-                r.degenerate);
+                r.degenerate, r.lost_components);
 }
 
 }  // namespace

@@ -7,8 +7,10 @@
 //   polyheal_gen torus OUT                    closed torus R=3, r=1
 //   polyheal_gen offset --distance D IN OUT   raw offset along area-weighted vertex normals
 //   polyheal_gen dirty-box OUT                box of separate patches: gap, overlap, T-junctions, hole
+//   polyheal_gen distance A B                 one-sided distances A->B and B->A (the reports' measure)
 //
 // Output format from the extension; files are overwritten.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -18,6 +20,7 @@
 
 #include "polyheal/io/read.h"
 #include "polyheal/io/write.h"
+#include "polyheal/repair/detail/distance.h"
 
 using namespace polyheal;
 
@@ -279,7 +282,8 @@ Soup narrow_clearance(std::size_t faces, int tubes) {
                "       polyheal_gen torus OUT\n"
                "       polyheal_gen offset --distance D IN OUT\n"
                "       polyheal_gen dirty-box OUT\n"
-               "       polyheal_gen narrow-clearance [--faces N] [--tubes K] OUT\n");
+               "       polyheal_gen narrow-clearance [--faces N] [--tubes K] OUT\n"
+               "       polyheal_gen distance A B   (prints: A->B B->A diagonal-of-A, bounded error 1e-4 diagonal)\n");
   std::exit(2);
 }
 
@@ -302,6 +306,20 @@ int main(int argc, char** argv) {
     pos.push_back(argv[i]);
   }
   try {
+    if (cmd == "distance" && pos.size() == 2) {
+      const Soup a = read_soup(pos[0]), b = read_soup(pos[1]);
+      double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+      for (const Point3d& p : a.points)
+        for (int k = 0; k < 3; ++k) {
+          lo[k] = std::min(lo[k], p[k]);
+          hi[k] = std::max(hi[k], p[k]);
+        }
+      const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                    (hi[2] - lo[2]) * (hi[2] - lo[2]));
+      const std::array<double, 2> d = detail::one_sided_distances(a, b, 1e-4 * diag);
+      std::printf("%.6g %.6g %.6g\n", d[0], d[1], diag);
+      return 0;
+    }
     Soup s;
     if (cmd == "tube" && pos.size() == 1) s = tube(opt("--outer", 5.0), opt("--inner", 4.8), opt("--length", 12.0), opt("--edge", 3.0));
     else if (cmd == "cylinder" && pos.size() == 1) s = cylinder(int(opt("--segments", 96)), opt("--radius", 10), opt("--height", 40));

@@ -12,16 +12,20 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <numeric>
 #include <unordered_map>
 
+#include "polyheal/inspect/local_index.h"
 #include "polyheal/inspect/report.h"
+#include "polyheal/mesh/convert.h"
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/mesh.h"
 #include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/union_find.h"
 #include "polyheal/mesh/weld.h"
 #include "polyheal/repair/detail/distance.h"
+#include "polyheal/repair/detail/shape_decimation.h"
 
 namespace polyheal {
 namespace {
@@ -169,6 +173,12 @@ double largest_gap(const Facets& f, double limit) {
     for (auto it : near) {
       const std::size_t j = static_cast<std::size_t>(it - segments.begin());
       if (loops.find(edges[j][0]) == loop) continue;
+      // Seams run along each other: the edges are nearly parallel.
+      const Point3d &c = f.points[edges[j][0]], &e = f.points[edges[j][1]];
+      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {e[0] - c[0], e[1] - c[1], e[2] - c[2]};
+      const double uv = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+      if (uv * uv < 0.8 * (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]))
+        continue;
       const double d = std::sqrt(CGAL::to_double(CGAL::squared_distance(ipoint(m), segments[j])));
       if (d < limit) across.push_back({d, j});
     }
@@ -738,6 +748,151 @@ class PlanarCoarsening {
 };
 
 // ---------------------------------------------------------------------------
+// Decimation within a tolerance (the paper's §5: fewer faces). Halfedge
+// collapses v -> u keep every position (no new coordinates). A collapse is
+// made only if
+//   - the link condition holds (manifold, same topology) and the new fan
+//     stays small (valence);
+//   - no new triangle is exactly degenerate, or turns more than 60 degrees
+//     from the face it replaces;
+//   - the error bound stays within the tolerance: each face carries a bound
+//     on how far the surface it replaced may be from it (the removed
+//     vertex's distance to the new fan, plus what the replaced faces
+//     carried) — a measurement in doubles; the report's Hausdorff distance
+//     is measured on the result;
+//   - no new triangle intersects another face (the oracle's local query,
+//     exact).
+// Sweeps with growing thresholds (a quarter, half, all of the tolerance)
+// take the cheapest collapses first.
+
+class BoundedDecimation {
+ public:
+  BoundedDecimation(Mesh& mesh, double tolerance)
+      : mesh_(mesh), index_(mesh), tolerance_(tolerance) {
+    error_ = mesh_.add_property_map<face_descriptor, double>("f:rebuild_error", 0.0).first;
+    for (vertex_descriptor v : mesh_.vertices()) at_.push_back(nearest_point3d(mesh_.point(v)));
+  }
+
+  std::size_t run() {
+    std::size_t collapses = 0;
+    for (double fraction : {0.25, 0.5, 1.0}) {
+      const double limit = fraction * tolerance_;
+      for (std::size_t sweep = 0; sweep < 2; ++sweep) {
+        std::size_t made = 0;
+        std::vector<vertex_descriptor> all(mesh_.vertices().begin(), mesh_.vertices().end());
+        for (vertex_descriptor v : all)
+          if (!mesh_.is_removed(v) && try_collapse(v, limit)) ++made;
+        collapses += made;
+        if (made == 0) break;
+      }
+    }
+    return collapses;
+  }
+
+ private:
+  static constexpr std::size_t kMaxValence = 24;
+
+  struct Candidate {
+    halfedge_descriptor h;  // v -> u
+    double error = 0, quality = 0;
+    std::vector<std::array<vertex_descriptor, 3>> proposed;
+  };
+
+  const Point3d& at(vertex_descriptor v) const { return at_[static_cast<std::size_t>(v)]; }
+
+  static Point3d normal(const Point3d& a, const Point3d& b, const Point3d& c) {
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    return {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+  }
+  static double dot(const Point3d& a, const Point3d& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+  /// Smallest angle's sine-like measure: 1 - cos of the smallest angle.
+  static double quality(const Point3d& a, const Point3d& b, const Point3d& c) {
+    const Point3d* p[3] = {&a, &b, &c};
+    double worst = HUGE_VAL;
+    for (int k = 0; k < 3; ++k) {
+      const Point3d &o = *p[k], &x = *p[(k + 1) % 3], &y = *p[(k + 2) % 3];
+      const Point3d u{x[0] - o[0], x[1] - o[1], x[2] - o[2]}, w{y[0] - o[0], y[1] - o[1], y[2] - o[2]};
+      worst = std::min(worst, 1 - dot(u, w) / std::sqrt(dot(u, u) * dot(w, w)));
+    }
+    return worst;
+  }
+
+  bool try_collapse(vertex_descriptor v, double limit) {
+    std::vector<face_descriptor> star;
+    double carried = 0, old_quality = HUGE_VAL;
+    for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
+      const face_descriptor f = mesh_.face(g);
+      star.push_back(f);
+      carried = std::max(carried, error_[f]);
+      old_quality = std::min(old_quality, quality(at(mesh_.source(g)), at(v), at(mesh_.target(mesh_.next(g)))));
+    }
+    if (carried >= limit) return false;
+    std::vector<Candidate> candidates;
+    for (halfedge_descriptor h : CGAL::halfedges_around_source(v, mesh_)) {
+      const vertex_descriptor u = mesh_.target(h);
+      if (star.size() + mesh_.degree(u) > kMaxValence + 4) continue;
+      Candidate c;
+      c.h = h;
+      c.quality = HUGE_VAL;
+      double d2 = HUGE_VAL;
+      bool ok = true;
+      for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
+        const vertex_descriptor a = mesh_.source(g), b = mesh_.target(mesh_.next(g));
+        if (a == u || b == u) continue;  // the two faces the collapse removes
+        const Point3d &pa = at(a), &pu = at(u), &pb = at(b);
+        const Point3d n_old = normal(pa, at(v), pb), n_new = normal(pa, pu, pb);
+        if (dot(n_old, n_new) <= 0.5 * std::sqrt(dot(n_old, n_old) * dot(n_new, n_new)) ||
+            CGAL::collinear(mesh_.point(a), mesh_.point(u), mesh_.point(b))) {
+          ok = false;
+          break;
+        }
+        c.quality = std::min(c.quality, quality(pa, pu, pb));
+        d2 = std::min(d2, detail::squared_distance_to_triangle(at(v), pa, pu, pb));
+        c.proposed.push_back({a, u, b});
+      }
+      if (!ok || c.proposed.empty()) continue;
+      c.error = carried + std::sqrt(d2);
+      // Never make the worst triangle much worse than the star's (needles
+      // are what TetGen and users stumble on).
+      if (c.error > limit || c.quality < std::min(old_quality, 0.004)) continue;
+      candidates.push_back(std::move(c));
+    }
+    std::sort(candidates.begin(), candidates.end(),
+              [](const Candidate& a, const Candidate& b) { return a.quality > b.quality; });
+    for (const Candidate& c : candidates) {
+      if (!CGAL::Euler::does_satisfy_link_condition(mesh_.edge(c.h), mesh_)) continue;
+      if (index_.would_intersect(c.proposed, star)) continue;
+      apply(c, star);
+      return true;
+    }
+    return false;
+  }
+
+  void apply(const Candidate& c, const std::vector<face_descriptor>& star) {
+    const vertex_descriptor u = mesh_.target(c.h);
+    const Point keep = mesh_.point(u);
+    const Point3d keep_at = at(u);
+    for (face_descriptor f : star) index_.remove(f);
+    const vertex_descriptor kept = CGAL::Euler::collapse_edge(mesh_.edge(c.h), mesh_);
+    mesh_.point(kept) = keep;
+    at_[static_cast<std::size_t>(kept)] = keep_at;
+    std::vector<face_descriptor> changed;
+    for (face_descriptor f : CGAL::faces_around_target(mesh_.halfedge(kept), mesh_)) {
+      changed.push_back(f);
+      error_[f] = std::max(error_[f], c.error);
+    }
+    index_.update(changed);
+  }
+
+  Mesh& mesh_;
+  LocalIndex index_;
+  double tolerance_;
+  Mesh::Property_map<face_descriptor, double> error_;
+  std::vector<Point3d> at_;
+};
+
+// ---------------------------------------------------------------------------
 // §3.2.4: output faces grouped by the input group of their vertices' facets
 // (majority), or, when the input has none, into regions whose adjacent
 // normals stay within the feature angle.
@@ -843,12 +998,12 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   } else if (options.cell_ratio > 0) {
     r.cell = options.cell_ratio * r.diagonal;
     r.cell_rule = "--cell, relative to the diagonal";
-  } else if (2 * r.largest_gap > 0.01 * r.diagonal) {
-    r.cell = 2 * r.largest_gap;
-    r.cell_rule = "default: twice the largest gap between boundary loops (larger than 1% of the diagonal)";
+  } else if (1.25 * r.largest_gap > 0.01 * r.diagonal) {
+    r.cell = 1.25 * r.largest_gap;
+    r.cell_rule = "default: 1.25 x the largest gap between boundary loops (more than 1% of the diagonal)";
   } else {
     r.cell = 0.01 * r.diagonal;
-    r.cell_rule = "default: 1% of the bounding-box diagonal (larger than twice the largest gap)";
+    r.cell_rule = "default: 1% of the bounding-box diagonal (more than 1.25 x the largest gap)";
   }
   Grid g;
   g.h = r.cell;
@@ -960,6 +1115,21 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   Soup& out = result.soup;
   for (const OutVertex& v : vertices) out.points.push_back(v.p);
   for (const Tri& t : tris) out.add_triangle(t[0], t[1], t[2]);
+  if (options.decimate && out.face_count() > 0) {
+    if (obs) obs->stage("decimating");
+    Mesh mesh;
+    soup_to_mesh(out, mesh);
+    BoundedDecimation decimation(mesh, options.decimate_tolerance * r.cell);
+    r.decimated = decimation.run();
+    mesh.collect_garbage();
+    Soup decimated = mesh_to_soup(mesh);
+    // Collapses keep positions: each vertex finds its facet by its point.
+    std::map<Point3d, std::int64_t> facet_at;
+    for (std::size_t v = 0; v < vertices.size(); ++v) facet_at.emplace(out.points[v], vertices[v].facet);
+    vertices.clear();
+    for (const Point3d& p : decimated.points) vertices.push_back({p, facet_at.at(p)});
+    out = std::move(decimated);
+  }
   r.face_groups = group_faces(f, input, vertices, out, options.feature_angle);
   r.faces_out = out.face_count();
   r.vertices_out = out.points.size();
@@ -967,6 +1137,48 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   if (options.certify) certify_rebuild(input, out, r);
   return result;
 }
+
+namespace {
+
+/// Input faces whose corners are all farther than `far` from `written`, and
+/// the input components made only of such faces.
+void count_lost(const Soup& input, const Soup& written, double far, RebuildReport& r) {
+  const Soup welded = apply_weld(input, weld_identical_points(input.points));
+  const Topology topo = analyze_topology(welded);
+  const detail::SurfaceDistance to_output(written);
+  std::vector<char> is_far(input.points.size(), 0);
+  tbb::parallel_for(std::size_t(0), input.points.size(), [&](std::size_t v) {
+    is_far[v] = to_output.squared_distance(input.points[v]) > far * far;
+  });
+  std::vector<char> kept(topo.components, 0);
+  double area = 0, lost_area = 0;
+  r.lost_faces = 0;
+  for (std::size_t f = 0; f < welded.face_count(); ++f) {
+    const FaceView v = welded.face(f);
+    double a = 0;
+    for (std::size_t k = 1; k + 1 < v.size(); ++k) {
+      const Point3d n = [&] {
+        const Point3d &p = welded.points[v[0]], &q = welded.points[v[k]], &w = welded.points[v[k + 1]];
+        const double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]}, x[3] = {w[0] - p[0], w[1] - p[1], w[2] - p[2]};
+        return Point3d{u[1] * x[2] - u[2] * x[1], u[2] * x[0] - u[0] * x[2], u[0] * x[1] - u[1] * x[0]};
+      }();
+      a += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    }
+    area += a;
+    bool lost = true;
+    for (Index i : v) lost = lost && is_far[i];
+    if (lost) {
+      ++r.lost_faces;
+      lost_area += a;
+    } else {
+      kept[topo.face_component[f]] = 1;
+    }
+  }
+  r.lost_components = std::size_t(std::count(kept.begin(), kept.end(), 0));
+  r.lost_area_fraction = area > 0 ? lost_area / area : 0;
+}
+
+}  // namespace
 
 void certify_rebuild(const Soup& input, const Soup& written, RebuildReport& r) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -989,7 +1201,9 @@ void certify_rebuild(const Soup& input, const Soup& written, RebuildReport& r) {
     r.input_to_output = d[0];
     r.output_to_input = d[1];
     r.hausdorff = std::max(d[0], d[1]);
+    count_lost(input, written, r.cell > 0 ? 2 * r.cell : 0.02 * r.diagonal, r);
   }
+  r.certified = r.certified && r.lost_components == 0;
   r.seconds_certify = seconds_since(t0);
 }
 

@@ -54,6 +54,8 @@ struct RebuildOptions {
   double feature_angle = 30;   // degrees: grouping output faces when the input has no groups
   bool keep_clean = true;      // a certified clean input is returned unchanged
   bool simplify = true;        // collapse vertices inside planar regions (exact, surface unchanged)
+  bool decimate = true;        // then collapse vertices elsewhere, within decimate_tolerance (see below)
+  double decimate_tolerance = 0.25;  // fraction of the cell: distance of new faces to the extracted surface
   bool certify = true;         // inspect the result and measure the Hausdorff distance
   std::size_t max_cells = 20'000'000;  // refuse a finer grid (UnsupportedInput)
   Observer* observer = nullptr;
@@ -83,6 +85,7 @@ struct RebuildReport {
   bool volume = false;                  // some corner is inside
   std::size_t extracted_faces = 0;      // before simplification
   std::size_t collapses = 0;            // planar vertices removed
+  std::size_t decimated = 0;            // vertices removed by decimation
   std::size_t faces_out = 0, vertices_out = 0, components_out = 0, face_groups = 0;
   // certification (of the result as rounded to doubles)
   bool certified = false;
@@ -91,6 +94,11 @@ struct RebuildReport {
   double hausdorff = -1, hausdorff_error_bound = 0;  // symmetric, to the input (-1: not measured)
   double input_to_output = -1;   // one-sided: how far the input is from the output (detail lost)
   double output_to_input = -1;   // one-sided: how far the output is from the input (gap and hole fills)
+  // Input the output does not represent (every corner farther than two cells
+  // from it): open sheets and fins that enclose nothing. A component lost
+  // whole is never certified: nothing is dropped silently.
+  std::size_t lost_faces = 0, lost_components = 0;
+  double lost_area_fraction = 0;
   // seconds
   double seconds_prepare = 0, seconds_octree = 0, seconds_winding = 0, seconds_extract = 0,
          seconds_simplify = 0, seconds_certify = 0;
@@ -106,7 +114,9 @@ struct RebuildResult {
 RebuildResult rebuild(const Soup& input, const RebuildOptions& options = {});
 
 /// Certifies `written` (the result as read back from the file) against
-/// `input`: fills the report's certification fields.
+/// `input`: fills the report's certification fields. Certified: closed,
+/// 2-manifold, oriented, no degenerate face or self-intersection, some volume,
+/// and no input component lost.
 void certify_rebuild(const Soup& input, const Soup& written, RebuildReport& report);
 
 }  // namespace polyheal

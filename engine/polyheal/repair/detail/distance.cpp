@@ -135,9 +135,10 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
   return lower;
 }
 
-/// Squared distance to a triangle; a zero-area one counts as its edges.
-double distance2(const K::Point_3& q, const K::Triangle_3& t) {
-  if (t.is_degenerate())
+/// Squared distance to a triangle; a zero-area one (`degenerate`) counts as
+/// its edges.
+double distance2(const K::Point_3& q, const K::Triangle_3& t, bool degenerate) {
+  if (degenerate)
     return std::min({CGAL::squared_distance(q, K::Segment_3(t[0], t[1])),
                      CGAL::squared_distance(q, K::Segment_3(t[1], t[2])),
                      CGAL::squared_distance(q, K::Segment_3(t[2], t[0]))});
@@ -147,11 +148,19 @@ double distance2(const K::Point_3& q, const K::Triangle_3& t) {
 }  // namespace
 
 double squared_distance_to_triangle(const Point3d& p, const Point3d& a, const Point3d& b, const Point3d& c) {
-  return distance2(point(p), K::Triangle_3(point(a), point(b), point(c)));
+  // A triangle whose area is clearly non-zero in doubles is not degenerate;
+  // only slivers pay for the exact test.
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  const double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+  const K::Triangle_3 t(point(a), point(b), point(c));
+  const bool clearly_not_flat = n[0] * n[0] + n[1] * n[1] + n[2] * n[2] > 1e-20 * uu * vv;
+  return distance2(point(p), t, !clearly_not_flat && t.is_degenerate());
 }
 
 struct SurfaceDistance::Impl {
   Triangles triangles;
+  std::vector<char> degenerate;  // per triangle, decided once (an exact test, slow on slivers)
   Tree tree;
 };
 
@@ -159,7 +168,10 @@ SurfaceDistance::SurfaceDistance(const Soup& soup) : SurfaceDistance(triangles_o
 
 SurfaceDistance::SurfaceDistance(const std::vector<std::array<Point3d, 3>>& triangles)
     : impl_(std::make_unique<Impl>()) {
-  for (const auto& t : triangles) impl_->triangles.emplace_back(point(t[0]), point(t[1]), point(t[2]));
+  for (const auto& t : triangles) {
+    impl_->triangles.emplace_back(point(t[0]), point(t[1]), point(t[2]));
+    impl_->degenerate.push_back(impl_->triangles.back().is_degenerate());
+  }
   impl_->tree.insert(impl_->triangles.cbegin(), impl_->triangles.cend());
   impl_->tree.accelerate_distance_queries();
 }
@@ -215,7 +227,7 @@ std::pair<double, std::size_t> SurfaceDistance::nearest(const Point3d& p, std::s
 }
 
 double SurfaceDistance::squared_distance_to(const Point3d& p, std::size_t t) const {
-  return distance2(point(p), impl_->triangles[t]);
+  return distance2(point(p), impl_->triangles[t], impl_->degenerate[t] != 0);
 }
 
 double SurfaceDistance::squared_distance(const Point3d& p) const {
