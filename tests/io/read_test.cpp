@@ -236,3 +236,21 @@ TEST_CASE("read: large OFF is parsed in parallel chunks; the first error in file
   // Errors in a vertex chunk and a later face chunk: the earlier one is reported.
   CHECK(error(90000, 10) == error(90000, none));
 }
+
+TEST_CASE("read: ASCII STL with several solids gives one group per solid", "[io]") {
+  const std::string path = scratch("two_solids.stl");
+  write_bytes(path,
+              "solid top face\nfacet normal 0 0 1\nouter loop\nvertex 0 0 1\nvertex 1 0 1\nvertex 0 1 1\n"
+              "endloop\nendfacet\nendsolid\nsolid\nfacet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 0 1 0\n"
+              "vertex 1 0 0\nendloop\nendfacet\nfacet normal 0 0 -1\nouter loop\nvertex 1 0 0\nvertex 0 1 0\n"
+              "vertex 1 1 0\nendloop\nendfacet\nendsolid\n");
+  const Soup s = read_soup(path);
+  REQUIRE(s.face_count() == 3);
+  CHECK(s.group_names == std::vector<std::string>{"top face", "solid1"});
+  CHECK(s.face_group == std::vector<std::int32_t>{0, 1, 1});
+  // One solid: no groups (a plain STL).
+  const std::string one = scratch("one_solid.stl");
+  write_bytes(one, "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n"
+                   "endloop\nendfacet\nendsolid x\n");
+  CHECK(read_soup(one).face_group.empty());
+}

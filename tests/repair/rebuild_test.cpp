@@ -283,3 +283,27 @@ TEST_CASE("rebuild: an open sheet beside a solid is reported lost, not dropped s
   CHECK_FALSE(r.certified);
   CHECK(inspect(result.soup).certified_clean());  // the box itself is fine
 }
+
+TEST_CASE("rebuild: output faces keep the input's groups (CAD faces)", "[rebuild]") {
+  // The box's six sides as six named groups, edges defined twice at the seams.
+  Soup in = box_patches(3.0, 2);
+  in.group_names = {"bottom", "top", "left", "right", "front", "back"};
+  in.face_group.resize(in.face_count());
+  for (std::size_t f = 0; f < in.face_count(); ++f) in.face_group[f] = std::int32_t((f / 2) % 6);
+  const RebuildResult result = rebuild(in);
+  CHECK(result.report.certified);
+  CHECK(result.report.face_groups == 6);
+  REQUIRE(result.soup.face_group.size() == result.soup.face_count());
+  // Faces well inside a side carry that side's group.
+  std::size_t checked = 0;
+  for (std::size_t f = 0; f < result.soup.face_count(); ++f) {
+    Point3d c{0, 0, 0};
+    for (Index v : result.soup.face(f))
+      for (int a = 0; a < 3; ++a) c[a] += result.soup.points[v][a] / 3;
+    if (c[2] > 2.99 && c[0] > 0.5 && c[0] < 2.5 && c[1] > 0.5 && c[1] < 2.5) {
+      CHECK(result.soup.face_group[f] == 1);
+      ++checked;
+    }
+  }
+  CHECK(checked > 0);
+}

@@ -371,12 +371,18 @@ Soup parse_stl_ascii(std::string_view bytes, const std::string& name) {
       t.fail("expected '" + std::string(word) + "', found '" + std::string(got.substr(0, 40)) + "'");
   };
   bool any_solid = false;
+  std::vector<std::string> solids;     // solid names (group names when there are several)
+  std::vector<std::int32_t> solid_of;  // per facet
   for (;;) {
     t.skip_empty_lines();
     if (t.at_end()) break;
     expect("solid");
     any_solid = true;
-    t.next_line();  // solid name
+    std::string solid_name;
+    for (std::string_view w = t.token(); !w.empty(); w = t.token())
+      solid_name += (solid_name.empty() ? "" : " ") + std::string(w.substr(0, 200));
+    solids.push_back(solid_name.empty() ? "solid" + std::to_string(solids.size()) : solid_name);
+    t.next_line();
     for (;;) {
       t.skip_empty_lines();
       if (t.at_end()) t.fail("file ends inside a solid (missing 'endsolid')");
@@ -400,10 +406,16 @@ Soup parse_stl_ascii(std::string_view bytes, const std::string& name) {
       t.next_line();
       expect("endfacet");
       t.next_line();
+      solid_of.push_back(static_cast<std::int32_t>(solids.size() - 1));
     }
   }
   if (!any_solid) t.fail("no 'solid' in ASCII STL");
-  return weld_stl_corners(std::move(corners));
+  Soup s = weld_stl_corners(std::move(corners));
+  if (solids.size() > 1) {  // several solids: each is a group (a CAD face or body)
+    s.face_group = std::move(solid_of);
+    s.group_names = std::move(solids);
+  }
+  return s;
 }
 
 template <class T>

@@ -33,7 +33,10 @@
 // facets carry (OBJ groups, STL solids), or else by a feature angle.
 // Planar regions are coarsened exactly: a vertex whose whole star lies in
 // one plane is collapsed away when the fan that replaces it tiles the same
-// polygon (the surface, as a point set, is unchanged).
+// polygon (the surface, as a point set, is unchanged). The rest is decimated
+// by halfedge collapses within a quarter cell of the extracted surface, each
+// checked exactly for self-intersection by the oracle's local query (§5:
+// fewer faces).
 // §3.2.7: a soup that encloses nothing (no corner inside) has no volume; the
 // report says so, names the open boundary loops, and nothing is invented.
 // An input that is already certified clean comes out unchanged.
