@@ -13,6 +13,7 @@ namespace {
 
 struct RebuildArgs : RepairFiles {
   std::string cell;  // "0.5" (model units) or "1%" (of the bbox diagonal)
+  std::string sheets = "shell";
   RebuildOptions options;
 };
 
@@ -26,7 +27,7 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
       {"volume", r.volume},
       {"parameters",
        {{"cell", r.cell}, {"cell_rule", r.cell_rule}, {"feature_angle", a.options.feature_angle},
-        {"simplify", a.options.simplify}, {"keep_clean", a.options.keep_clean}}},
+        {"simplify", a.options.simplify}, {"keep_clean", a.options.keep_clean}, {"sheets", a.sheets}}},
       {"input_mesh",
        {{"faces", r.faces},
         {"vertices", r.vertices},
@@ -34,6 +35,9 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
         {"zero_area_faces", r.zero_area_faces},
         {"reoriented_faces", r.reoriented_faces},
         {"boundary_loops", r.boundary_loops},
+        {"sheet_facets", r.sheet_facets},
+        {"thin_facets", r.thin_facets},
+        {"shell", r.shell},
         {"diagonal", r.diagonal},
         {"largest_gap", r.largest_gap}}},
       {"grid",
@@ -65,6 +69,7 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
       {"input_to_output", r.input_to_output},
       {"output_to_input", r.output_to_input},
       {"lost", {{"faces", r.lost_faces}, {"components", r.lost_components}, {"area_fraction", r.lost_area_fraction}}},
+      {"absorbed_faces", r.absorbed_faces},
       {"hausdorff_cells", r.cell > 0 && r.hausdorff >= 0 ? r.hausdorff / r.cell : -1},
       {"seconds",
        {{"read", read_s},
@@ -89,12 +94,18 @@ void print_text(const RebuildArgs& a, const RebuildReport& r) {
                 "cells + %zu closing gaps and holes\n",
                 r.cell, r.cell_rule.c_str(), r.largest_gap, r.diagonal, r.depth, r.octree_nodes, r.boundary_cells,
                 r.closure_cells);
+    if (r.sheet_facets)
+      std::printf("  %zu facets bound no volume (open or double-sided sheets): %s\n", r.sheet_facets,
+                  r.shell > 0 ? ("wrapped in a shell of half-thickness " + std::to_string(r.shell)).c_str()
+                              : "left out (--sheets drop)");
+    if (r.thin_facets)
+      std::printf("  %zu facets of parts thinner than a cell: wrapped in the shell too\n", r.thin_facets);
     std::printf("  corners: %zu, %zu inside; %zu crossed grid edges: %zu on facets, %zu interpolated across "
                 "gaps/holes\n",
                 r.corners, r.inside_corners, r.crossed_edges, r.facet_crossings, r.interpolated);
     if (!r.volume) {
       std::printf("  => the soup encloses no volume (no grid corner has winding number > 1/2; %zu open boundary "
-                  "loops): the input is written as read, NOT CERTIFIED\n",
+                  "loops; --sheets shell would wrap them): the input is written as read, NOT CERTIFIED\n",
                   r.boundary_loops);
       return;
     }
@@ -111,9 +122,13 @@ void print_text(const RebuildArgs& a, const RebuildReport& r) {
                 "to input %g (gap and hole fills)\n",
                 r.hausdorff, r.hausdorff_error_bound, r.cell > 0 ? r.hausdorff / r.cell : 0.0, r.input_to_output,
                 r.output_to_input);
+  if (r.absorbed_faces)
+    std::printf("  %zu input faces lie inside the volume, farther than two cells from its surface (inner walls, "
+                "enclosed parts): absorbed\n",
+                r.absorbed_faces);
   if (r.lost_faces)
-    std::printf("  %zu input faces (%.3g%% of the area) are farther than two cells from the output: they enclose no "
-                "volume (open sheets, fins, inner walls)%s\n",
+    std::printf("  %zu input faces (%.3g%% of the area) are farther than two cells from the output and outside it: "
+                "not represented (sheets left out, parts thinner than a cell)%s\n",
                 r.lost_faces, 100 * r.lost_area_fraction,
                 r.lost_components ? (", " + std::to_string(r.lost_components) + " whole components LOST").c_str() : "");
   if (r.certified)
@@ -136,20 +151,23 @@ void add_rebuild(CLI::App& app, int& exit_code) {
       "Any soup is accepted: no manifoldness or closure needed; polygons are fanned,\n"
       "zero-area faces left out, inconsistently oriented components made consistent.\n"
       "An octree is refined where it meets the facets down to the cell size; each\n"
-      "grid corner is classified inside or outside by its generalised winding\n"
-      "number (gaps and holes are spanned, overlaps count once); the output is the\n"
-      "boundary of the inside corners (marching tetrahedra), its vertices on the\n"
-      "facets where grid edges cross them (exact), interpolated across gaps and\n"
-      "holes. It is closed, 2-manifold and oriented by construction; planar regions\n"
-      "are coarsened without moving the surface, then the rest is decimated within\n"
-      "a quarter cell (each collapse checked exactly for self-intersection). Faces\n"
-      "are grouped by the input's\n"
-      "groups (OBJ g, STL solids), else by --feature-angle (OBJ output keeps them).\n"
-      "A clean input is written unchanged. The written file is read back and\n"
-      "checked exactly; the Hausdorff distance to the input is measured.\n\n"
+      "grid corner is inside when its generalised winding number is above 1/2 (gaps\n"
+      "and holes are spanned, overlaps count once). Facets that bound no volume\n"
+      "(open or double-sided sheets) are wrapped in a shell one cell thick on each\n"
+      "side, unless --sheets drop. The output is the boundary of the inside corners\n"
+      "(marching tetrahedra), its vertices on the exact crossings of grid edges with\n"
+      "facets, interpolated across gaps, holes and shells: closed, 2-manifold and\n"
+      "oriented by construction. Planar regions are coarsened without moving the\n"
+      "surface, the rest decimated within a quarter cell (each collapse checked\n"
+      "exactly for self-intersection). Faces are grouped by the input's groups (OBJ\n"
+      "g, STL solids), else by --feature-angle (OBJ output keeps them). A clean input\n"
+      "is written unchanged. The written file is read back and checked exactly; the\n"
+      "distances input->output and output->input are measured, and input faces the\n"
+      "output does not represent are counted.\n\n"
       "Exit 0 when the written file is closed, 2-manifold, oriented, without\n"
-      "degenerate faces or self-intersections; 1 otherwise (also when the soup\n"
-      "encloses no volume: then the input is written as read); 2 on error.");
+      "degenerate faces or self-intersections, and no input component is lost;\n"
+      "1 otherwise (also when, with --sheets drop, the soup encloses no volume:\n"
+      "then the input is written as read); 2 on error.");
   add_repair_files(cmd, *args, "polyheal.rebuild/1", "",
                    "input soup (.off, .obj, .stl, .ply): any faces, open, non-manifold, overlapping");
   cmd->add_option("--cell", args->cell,
@@ -161,11 +179,16 @@ void add_rebuild(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-simplify{false}", args->options.simplify,
                 "keep every extracted triangle (no planar coarsening, no decimation)");
   cmd->add_flag("--always{false}", args->options.keep_clean, "rebuild even an input that is already clean");
+  cmd->add_option("--sheets", args->sheets,
+                  "facets that bound no volume (open or double-sided sheets): 'shell' wraps them one cell thick on "
+                  "each side (default), 'drop' leaves them out (reported lost)")
+      ->check(CLI::IsMember({"shell", "drop"}));
   cmd->callback([args, &exit_code] {
     double ratio = -1;
     parse_length("--cell", args->cell, args->options.cell, ratio);
     args->options.cell_ratio = ratio;
     args->options.decimate = args->options.simplify;  // --no-simplify keeps every extracted triangle
+    args->options.sheets = args->sheets == "shell";
     TtyProgress progress;
     double read_s = 0;
     const Soup soup = read_repair_input(*args, progress, read_s);

@@ -236,11 +236,13 @@ TEST_CASE("rebuild: inconsistently oriented patches are reoriented", "[rebuild]"
   CHECK(std::abs(volume(out) - 8.0) < 8.0 * 0.05);
 }
 
-TEST_CASE("rebuild: a soup that encloses nothing gets no invented volume (3.2.7)", "[rebuild]") {
+TEST_CASE("rebuild: without shells, a soup that encloses nothing gets no invented volume (3.2.7)", "[rebuild]") {
   Soup sheet;
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j) quad(sheet, {double(i), double(j), 0}, {i + 1.0, double(j), 0}, {i + 1.0, j + 1.0, 0}, {double(i), j + 1.0, 0});
-  const RebuildResult result = rebuild(sheet);
+  RebuildOptions drop;
+  drop.sheets = false;
+  const RebuildResult result = rebuild(sheet, drop);
   CHECK_FALSE(result.report.volume);
   CHECK(result.report.inside_corners == 0);
   CHECK(result.soup.points == sheet.points);  // returned as read
@@ -270,18 +272,51 @@ TEST_CASE("rebuild: a grid finer than the limit is refused", "[rebuild]") {
   CHECK_THROWS_AS(rebuild(read_soup(test::fixture("dirty_box.obj")), o), UnsupportedInput);
 }
 
-TEST_CASE("rebuild: an open sheet beside a solid is reported lost, not dropped silently", "[rebuild]") {
+TEST_CASE("rebuild: an open sheet beside a solid is wrapped in a shell, or reported lost", "[rebuild]") {
   Soup in = box_patches(2.0, 2);
   for (int i = 0; i < 2; ++i)  // a flat sheet 3 units beside the box: it encloses nothing
     quad(in, {5.0 + i, 0, 0}, {6.0 + i, 0, 0}, {6.0 + i, 2, 0}, {5.0 + i, 2, 0});
-  const RebuildResult result = rebuild(in);
-  const RebuildReport& r = result.report;
-  CHECK(r.volume);
-  CHECK(r.lost_components == 1);
-  CHECK(r.lost_faces == 4);
-  CHECK(r.lost_area_fraction > 0.05);
-  CHECK_FALSE(r.certified);
-  CHECK(inspect(result.soup).certified_clean());  // the box itself is fine
+  SECTION("shell (default): a slab one cell thick on each side, nothing lost") {
+    const RebuildResult result = rebuild(in);
+    const RebuildReport& r = result.report;
+    const Soup out = written(result, "rebuild_sheet_shell.off");
+    check_solid(in, out, r, 2, 4);  // the box and the slab
+    CHECK(r.sheet_facets == 4);
+    CHECK(r.shell == r.cell);
+    CHECK(r.lost_faces == 0);
+    // box 8 + slab 2 x 2 x (2 shell); the slab's rim is rounded off within a shell
+    const double slab = volume(out) - 8.0;
+    CHECK(slab > 0.7 * 4.0 * 2 * r.shell);
+    CHECK(slab < 1.1 * (2 + 2 * r.shell) * (2 + 2 * r.shell) * 2 * r.shell);
+    CHECK(r.input_to_output <= 1.1 * r.cell);
+  }
+  SECTION("drop: the sheet is reported lost and the result is not certified") {
+    RebuildOptions drop;
+    drop.sheets = false;
+    const RebuildResult result = rebuild(in, drop);
+    const RebuildReport& r = result.report;
+    CHECK(r.volume);
+    CHECK(r.lost_components == 1);
+    CHECK(r.lost_faces == 4);
+    CHECK(r.lost_area_fraction > 0.05);
+    CHECK_FALSE(r.certified);
+    CHECK(inspect(result.soup).certified_clean());  // the box itself is fine
+  }
+}
+
+TEST_CASE("rebuild: a component inside another is absorbed, not lost", "[rebuild]") {
+  Soup in = box_patches(4.0, 2);
+  Soup inner = box_patches(1.0, 1);
+  for (Point3d& p : inner.points)
+    for (double& x : p) x += 1.5;
+  in = test::concat(in, inner);
+  RebuildOptions always;  // the nested boxes are a clean input as they stand
+  always.keep_clean = false;
+  const RebuildResult result = rebuild(in, always);
+  CHECK(result.report.absorbed_faces == inner.face_count());
+  CHECK(result.report.lost_components == 0);
+  CHECK(result.report.certified);
+  CHECK(inspect(result.soup).components == 1);
 }
 
 TEST_CASE("rebuild: output faces keep the input's groups (CAD faces)", "[rebuild]") {
@@ -306,4 +341,25 @@ TEST_CASE("rebuild: output faces keep the input's groups (CAD faces)", "[rebuild
     }
   }
   CHECK(checked > 0);
+}
+
+TEST_CASE("rebuild: a plate thinner than a cell is wrapped, not lost", "[rebuild]") {
+  Soup in = box_patches(4.0, 2);
+  for (Point3d& p : in.points) p[2] *= 0.00125;  // 4 x 4 x 0.005; the default cell is 0.057
+  // Take one face out so that the plate is not already clean.
+  Soup holed;
+  holed.points = in.points;
+  for (std::size_t f = 1; f < in.face_count(); ++f) holed.add_face(in.face(f).begin(), in.face(f).end());
+  const RebuildResult result = rebuild(holed);
+  const RebuildReport& r = result.report;
+  REQUIRE(r.cell > 10 * 0.005);
+  const Soup out = written(result, "rebuild_thin_plate.off");
+  check_solid(holed, out, r, 1, 2);
+  CHECK(r.thin_facets > 0);
+  CHECK(r.lost_faces == 0);
+  CHECK(r.input_to_output <= 1.1 * r.cell);
+  // Without shells the plate falls between the corners and is reported lost.
+  RebuildOptions drop;
+  drop.sheets = false;
+  CHECK_FALSE(rebuild(holed, drop).report.certified);
 }

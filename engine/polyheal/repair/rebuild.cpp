@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <unordered_map>
 
@@ -53,6 +54,7 @@ struct Facets {
   std::vector<Point3d> points;
   std::vector<Tri> tris;
   std::vector<std::int32_t> group;  // per triangle (-1: none)
+  std::vector<char> sheet;          // per triangle: bounds no volume (empty: none is)
 };
 
 Facets prepare(const Soup& input, RebuildReport& r) {
@@ -428,9 +430,9 @@ struct OutVertex {
 class Extractor {
  public:
   Extractor(const Facets& f, const Grid& g, const std::vector<Cell>& cells,
-            const std::unordered_map<std::uint64_t, std::uint32_t>& corner_id, const std::vector<double>& winding,
+            const std::unordered_map<std::uint64_t, std::uint32_t>& corner_id, const std::vector<double>& field,
             RebuildReport& r)
-      : f_(f), g_(g), cells_(cells), corner_id_(corner_id), w_(winding), r_(r) {}
+      : f_(f), g_(g), cells_(cells), corner_id_(corner_id), phi_(field), r_(r) {}
 
   void run(std::vector<OutVertex>& vertices, std::vector<Tri>& tris) {
     for (const Cell& c : cells_) {
@@ -453,7 +455,7 @@ class Extractor {
   static constexpr double kClamp = 1.0 / 64;  // a vertex stays this fraction of its edge away from the corners
 
   std::uint32_t corner(std::int64_t i, std::int64_t j, std::int64_t k) const { return corner_id_.at(key(i, j, k)); }
-  bool inside(std::int64_t i, std::int64_t j, std::int64_t k) const { return w_[corner(i, j, k)] > 0.5; }
+  bool inside(std::int64_t i, std::int64_t j, std::int64_t k) const { return phi_[corner(i, j, k)] > 0; }
 
   void tetrahedron(const Cell& c, const int v[4], int sign, const int in[8], std::vector<OutVertex>& vertices,
                    std::vector<Tri>& tris) {
@@ -503,13 +505,13 @@ class Extractor {
     if (found != edge_vertex_.end()) return found->second;
     const Point3d A = g_.corner(i, j, k);
     const Point3d B = g_.corner(c.i + (hi & 1), c.j + (hi >> 1 & 1), c.k + (hi >> 2 & 1));
-    const double wa = w_[corner(i, j, k)], wb = w_[corner(c.i + (hi & 1), c.j + (hi >> 1 & 1), c.k + (hi >> 2 & 1))];
-    const bool a_inside = wa > 0.5;
+    const double wa = phi_[corner(i, j, k)], wb = phi_[corner(c.i + (hi & 1), c.j + (hi >> 1 & 1), c.k + (hi >> 2 & 1))];
+    const bool a_inside = wa > 0;
     ++r_.crossed_edges;
     OutVertex out = crossing(c, A, B, a_inside);
     if (out.facet < 0) {
       ++r_.interpolated;
-      double t = (wa - 0.5) / (wa - wb);
+      double t = wa / (wa - wb);
       t = std::clamp(t, kClamp, 1 - kClamp);
       for (int x = 0; x < 3; ++x) out.p[x] = A[x] == B[x] ? A[x] : A[x] + t * (B[x] - A[x]);
     } else {
@@ -533,6 +535,7 @@ class Extractor {
     bool best_leaves = false;
     K::FT best_t(0);
     for (std::uint32_t t : c.tris) {
+      if (!f_.sheet.empty() && f_.sheet[t]) continue;  // wrapped in a shell: the surface is off the facet
       const Tri& tr = f_.tris[t];
       const IPoint p = ipoint(f_.points[tr[0]]), q = ipoint(f_.points[tr[1]]), s = ipoint(f_.points[tr[2]]);
       const CGAL::Orientation oa = CGAL::orientation(p, q, s, ia), ob = CGAL::orientation(p, q, s, ib);
@@ -568,7 +571,7 @@ class Extractor {
   const Grid& g_;
   const std::vector<Cell>& cells_;
   const std::unordered_map<std::uint64_t, std::uint32_t>& corner_id_;
-  const std::vector<double>& w_;
+  const std::vector<double>& phi_;  // per corner: > 0 inside (see rebuild())
   RebuildReport& r_;
   std::unordered_map<std::uint64_t, Index> edge_vertex_;
 };
@@ -977,7 +980,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
       return result;
     }
   }
-  const Facets f = prepare(input, r);
+  Facets f = prepare(input, r);
   Point3d lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
   for (const Tri& t : f.tris)
     for (Index v : t)
@@ -1037,10 +1040,67 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   t0 = std::chrono::steady_clock::now();
   if (obs) obs->stage("winding numbers");
   const WindingNumber winding(f);
+  // Facets that bound no volume (the winding number is below 1/2 on both
+  // sides: open sheets, double-sided sheets, stray triangles) are wrapped in
+  // a shell (options.sheets), so that nothing is dropped: a corner is inside
+  // when its winding number is above 1/2 or it is nearer than the shell's
+  // half-thickness to such a facet. The field phi (> 0 inside) interpolates
+  // across gaps, holes and shells.
+  std::unique_ptr<detail::SurfaceDistance> to_sheets;
+  const double shell = options.sheet_shell * g.h;
+  if (options.sheets) {
+    f.sheet.assign(f.tris.size(), 0);
+    tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
+      const Point3d &a = f.points[f.tris[t][0]], &b = f.points[f.tris[t][1]], &c = f.points[f.tris[t][2]];
+      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+      const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      if (!(len > 0)) return;
+      const double e = 0.05 * g.h / len;
+      Point3d front, back;
+      for (int k = 0; k < 3; ++k) {
+        const double m = (a[k] + b[k] + c[k]) / 3;
+        front[k] = m + e * n[k];
+        back[k] = m - e * n[k];
+      }
+      f.sheet[t] = winding(front) <= 0.5 && winding(back) <= 0.5;
+    });
+    // A sheet facet within the shell of a facet that does bound the volume (a
+    // stray copy of a patch, an overlap lying just off the surface) is
+    // represented by that surface already: no shell for it.
+    std::vector<std::array<Point3d, 3>> bounding;
+    for (std::size_t t = 0; t < f.tris.size(); ++t)
+      if (!f.sheet[t]) bounding.push_back({f.points[f.tris[t][0]], f.points[f.tris[t][1]], f.points[f.tris[t][2]]});
+    if (!bounding.empty()) {
+      const detail::SurfaceDistance to_bounding(bounding);
+      tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
+        if (!f.sheet[t]) return;
+        bool near = true;
+        for (int k = 0; k < 3 && near; ++k) near = to_bounding.squared_distance(f.points[f.tris[t][k]]) < shell * shell;
+        if (near) f.sheet[t] = 0;
+      });
+    }
+    std::vector<std::array<Point3d, 3>> sheets;
+    for (std::size_t t = 0; t < f.tris.size(); ++t)
+      if (f.sheet[t]) sheets.push_back({f.points[f.tris[t][0]], f.points[f.tris[t][1]], f.points[f.tris[t][2]]});
+    r.sheet_facets = sheets.size();
+    if (sheets.empty()) f.sheet.clear();
+    else {
+      to_sheets = std::make_unique<detail::SurfaceDistance>(sheets);
+      r.shell = shell;
+    }
+  }
   std::unordered_map<std::uint64_t, std::uint32_t> cell_id, corner_id;
   std::vector<std::array<std::int64_t, 3>> corner_at;
-  std::vector<double> w;
+  std::vector<double> wind;  // the winding number at each corner
+  std::vector<double> w;     // the field phi at each corner
   const std::int64_t limit = std::int64_t(1) << r.depth;
+  auto phi = [&](std::size_t c) {
+    const double x = wind[c] - 0.5;
+    if (!to_sheets) return x;
+    const Point3d q = g.corner(corner_at[c][0], corner_at[c][1], corner_at[c][2]);
+    return std::max(x, 0.5 * (shell - std::sqrt(to_sheets->squared_distance(q))) / shell);
+  };
   auto add_corners = [&](std::size_t first_cell) {
     const std::size_t first_corner = corner_at.size();
     for (std::size_t c = first_cell; c < cells.size(); ++c)
@@ -1049,57 +1109,106 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
         if (corner_id.emplace(key(i, j, k), static_cast<std::uint32_t>(corner_at.size())).second)
           corner_at.push_back({i, j, k});
       }
+    wind.resize(corner_at.size());
     w.resize(corner_at.size());
     tbb::parallel_for(first_corner, corner_at.size(), [&](std::size_t c) {
-      w[c] = winding(g.corner(corner_at[c][0], corner_at[c][1], corner_at[c][2]));
+      wind[c] = winding(g.corner(corner_at[c][0], corner_at[c][1], corner_at[c][2]));
+      w[c] = phi(c);
     });
   };
   for (std::size_t c = 0; c < cells.size(); ++c) cell_id.emplace(key(cells[c].i, cells[c].j, cells[c].k), c);
   add_corners(0);
-  for (std::size_t first = 0; first < cells.size();) {
-    const std::size_t end = cells.size();
-    for (std::size_t c = first; c < end; ++c) {
-      int count = 0;
-      for (int b = 0; b < 8; ++b)
-        count += w[corner_id.at(key(cells[c].i + (b & 1), cells[c].j + (b >> 1 & 1), cells[c].k + (b >> 2 & 1)))] > 0.5;
-      if (count == 0 || count == 8) continue;
-      // The surface leaves the cell through its faces whose corners differ:
-      // the neighbour across such a face must be extracted too.
-      for (int axis = 0; axis < 3; ++axis)
-        for (int side = 0; side < 2; ++side) {
-          int face_count = 0;
-          for (int b = 0; b < 8; ++b)
-            if ((b >> axis & 1) == side)
-              face_count += w[corner_id.at(key(cells[c].i + (b & 1), cells[c].j + (b >> 1 & 1),
-                                               cells[c].k + (b >> 2 & 1)))] > 0.5;
-          if (face_count == 0 || face_count == 4) continue;
-          std::int64_t n3[3] = {cells[c].i, cells[c].j, cells[c].k};
-          n3[axis] += side ? 1 : -1;
-          if (n3[axis] < 0 || n3[axis] >= limit) continue;
-          if (cell_id.emplace(key(n3[0], n3[1], n3[2]), static_cast<std::uint32_t>(cells.size())).second)
-            cells.push_back({n3[0], n3[1], n3[2], {}});
-        }
+  // Adds cells wherever the surface leaves the current ones (from `first` on).
+  auto close = [&](std::size_t first) {
+    while (first < cells.size()) {
+      const std::size_t end = cells.size();
+      for (std::size_t c = first; c < end; ++c) {
+        int count = 0;
+        for (int b = 0; b < 8; ++b)
+          count += w[corner_id.at(key(cells[c].i + (b & 1), cells[c].j + (b >> 1 & 1), cells[c].k + (b >> 2 & 1)))] > 0;
+        if (count == 0 || count == 8) continue;
+        // The surface leaves the cell through its faces whose corners differ:
+        // the neighbour across such a face must be extracted too.
+        for (int axis = 0; axis < 3; ++axis)
+          for (int side = 0; side < 2; ++side) {
+            int face_count = 0;
+            for (int b = 0; b < 8; ++b)
+              if ((b >> axis & 1) == side)
+                face_count += w[corner_id.at(key(cells[c].i + (b & 1), cells[c].j + (b >> 1 & 1),
+                                                 cells[c].k + (b >> 2 & 1)))] > 0;
+            if (face_count == 0 || face_count == 4) continue;
+            std::int64_t n3[3] = {cells[c].i, cells[c].j, cells[c].k};
+            n3[axis] += side ? 1 : -1;
+            if (n3[axis] < 0 || n3[axis] >= limit) continue;
+            if (cell_id.emplace(key(n3[0], n3[1], n3[2]), static_cast<std::uint32_t>(cells.size())).second)
+              cells.push_back({n3[0], n3[1], n3[2], {}});
+          }
+      }
+      add_corners(end);
+      first = end;
     }
-    add_corners(end);
-    first = end;
-  }
-  r.closure_cells = cells.size() - r.boundary_cells;
-  r.corners = corner_at.size();
-  r.inside_corners = std::size_t(std::count_if(w.begin(), w.end(), [](double x) { return x > 0.5; }));
-  r.volume = r.inside_corners > 0;
+  };
+  close(0);
   r.seconds_winding = seconds_since(t0);
-  if (!r.volume) {
-    // §3.2.7: nothing encloses a volume; nothing is invented.
-    result.soup = input;
-    return result;
-  }
 
   // Phase 2 (§3.2): the boundary of the inside corners, vertices on facets.
   t0 = std::chrono::steady_clock::now();
   if (obs) obs->stage("extracting");
   std::vector<OutVertex> vertices;
   std::vector<Tri> tris;
-  Extractor(f, g, cells, corner_id, w, r).run(vertices, tris);
+  const bool any_inside = std::any_of(w.begin(), w.end(), [](double x) { return x > 0; });
+  if (any_inside) Extractor(f, g, cells, corner_id, w, r).run(vertices, tris);
+  // Parts thinner than a cell (fins, thin walls) fall between the corners.
+  // Facets the surface does not come within a cell of, and that lie outside
+  // it, are wrapped in a shell too, and the surface extracted again: nothing
+  // of the input is dropped.
+  if (options.sheets) {
+    std::vector<std::array<Point3d, 3>> surface;
+    Facets extracted;
+    for (const OutVertex& v : vertices) extracted.points.push_back(v.p);
+    extracted.tris = tris;
+    for (const Tri& t : tris) surface.push_back({vertices[t[0]].p, vertices[t[1]].p, vertices[t[2]].p});
+    const detail::SurfaceDistance to_surface(surface);
+    const WindingNumber inside_surface(extracted);
+    std::vector<char> thin(f.tris.size(), 0);
+    tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
+      if (!f.sheet.empty() && f.sheet[t]) return;
+      Point3d c{0, 0, 0};
+      for (int k = 0; k < 3; ++k) {
+        const Point3d& p = f.points[f.tris[t][k]];
+        if (!tris.empty() && to_surface.squared_distance(p) <= g.h * g.h) return;
+        for (int a = 0; a < 3; ++a) c[a] += p[a] / 3;
+      }
+      thin[t] = tris.empty() || inside_surface(c) <= 0.5;
+    });
+    const std::size_t n_thin = std::size_t(std::count(thin.begin(), thin.end(), 1));
+    if (n_thin > 0) {
+      r.thin_facets = n_thin;
+      if (f.sheet.empty()) f.sheet.assign(f.tris.size(), 0);
+      std::vector<std::array<Point3d, 3>> wrapped;
+      for (std::size_t t = 0; t < f.tris.size(); ++t) {
+        if (thin[t]) f.sheet[t] = 1;
+        if (f.sheet[t]) wrapped.push_back({f.points[f.tris[t][0]], f.points[f.tris[t][1]], f.points[f.tris[t][2]]});
+      }
+      to_sheets = std::make_unique<detail::SurfaceDistance>(wrapped);
+      r.shell = shell;
+      tbb::parallel_for(std::size_t(0), w.size(), [&](std::size_t c) { w[c] = phi(c); });
+      close(0);
+      vertices.clear();
+      tris.clear();
+      r.crossed_edges = r.facet_crossings = r.interpolated = 0;
+      Extractor(f, g, cells, corner_id, w, r).run(vertices, tris);
+    }
+  }
+  r.closure_cells = cells.size() - r.boundary_cells;
+  r.corners = corner_at.size();
+  r.inside_corners = std::size_t(std::count_if(w.begin(), w.end(), [](double x) { return x > 0; }));
+  r.volume = r.inside_corners > 0;
+  if (!r.volume) {
+    // §3.2.7: nothing encloses a volume; nothing is invented.
+    result.soup = input;
+    return result;
+  }
   r.extracted_faces = tris.size();
   r.seconds_extract = seconds_since(t0);
 
@@ -1140,8 +1249,9 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
 
 namespace {
 
-/// Input faces whose corners are all farther than `far` from `written`, and
-/// the input components made only of such faces.
+/// Input faces whose corners are all farther than `far` from `written` and
+/// that lie outside it (lost) or inside it (absorbed), and the input
+/// components made only of lost faces.
 void count_lost(const Soup& input, const Soup& written, double far, RebuildReport& r) {
   const Soup welded = apply_weld(input, weld_identical_points(input.points));
   const Topology topo = analyze_topology(welded);
@@ -1150,9 +1260,18 @@ void count_lost(const Soup& input, const Soup& written, double far, RebuildRepor
   tbb::parallel_for(std::size_t(0), input.points.size(), [&](std::size_t v) {
     is_far[v] = to_output.squared_distance(input.points[v]) > far * far;
   });
+  // A far face inside the output's volume is absorbed (an inner wall, a
+  // component inside another), not lost.
+  Facets out;
+  out.points = written.points;
+  for (std::size_t f = 0; f < written.face_count(); ++f) {
+    const FaceView v = written.face(f);
+    for (std::size_t k = 1; k + 1 < v.size(); ++k) out.tris.push_back({v[0], v[k], v[k + 1]});
+  }
+  const WindingNumber inside_output(out);
   std::vector<char> kept(topo.components, 0);
   double area = 0, lost_area = 0;
-  r.lost_faces = 0;
+  r.lost_faces = r.absorbed_faces = 0;
   for (std::size_t f = 0; f < welded.face_count(); ++f) {
     const FaceView v = welded.face(f);
     double a = 0;
@@ -1165,11 +1284,19 @@ void count_lost(const Soup& input, const Soup& written, double far, RebuildRepor
       a += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     }
     area += a;
-    bool lost = true;
-    for (Index i : v) lost = lost && is_far[i];
-    if (lost) {
-      ++r.lost_faces;
-      lost_area += a;
+    bool far_away = true;
+    for (Index i : v) far_away = far_away && is_far[i];
+    if (far_away) {
+      Point3d c{0, 0, 0};
+      for (Index i : v)
+        for (int k = 0; k < 3; ++k) c[k] += welded.points[i][k] / double(v.size());
+      if (inside_output(c) > 0.5) {
+        ++r.absorbed_faces;
+        kept[topo.face_component[f]] = 1;
+      } else {
+        ++r.lost_faces;
+        lost_area += a;
+      }
     } else {
       kept[topo.face_component[f]] = 1;
     }

@@ -37,8 +37,11 @@
 // by halfedge collapses within a quarter cell of the extracted surface, each
 // checked exactly for self-intersection by the oracle's local query (§5:
 // fewer faces).
-// §3.2.7: a soup that encloses nothing (no corner inside) has no volume; the
-// report says so, names the open boundary loops, and nothing is invented.
+// Facets that bound no volume — the winding number is at most 1/2 on both
+// sides: open sheets, double-sided sheets, stray triangles — are wrapped in a
+// shell one cell thick on each side (`sheets`), so that no part of the input
+// is dropped; with sheets off they are left out and reported lost (§3.2.7: a
+// soup that encloses nothing then has no volume, and nothing is invented).
 // An input that is already certified clean comes out unchanged.
 #pragma once
 
@@ -56,6 +59,8 @@ struct RebuildOptions {
   double cell_ratio = -1;      // cell size as a fraction of the bbox diagonal; <= 0: the default rule
   double feature_angle = 30;   // degrees: grouping output faces when the input has no groups
   bool keep_clean = true;      // a certified clean input is returned unchanged
+  bool sheets = true;          // wrap facets that bound no volume in a shell (false: leave them out, reported lost)
+  double sheet_shell = 1.0;    // the shell's half-thickness, in cells
   bool simplify = true;        // collapse vertices inside planar regions (exact, surface unchanged)
   bool decimate = true;        // then collapse vertices elsewhere, within decimate_tolerance (see below)
   double decimate_tolerance = 0.25;  // fraction of the cell: distance of new faces to the extracted surface
@@ -70,6 +75,9 @@ struct RebuildReport {
   std::size_t zero_area_faces = 0;      // left out: they bound nothing
   std::size_t reoriented_faces = 0;     // flipped to agree with their component (inconsistent input)
   std::size_t boundary_loops = 0;       // of the welded input
+  std::size_t sheet_facets = 0;         // facets bounding no volume (winding <= 1/2 on both sides)
+  std::size_t thin_facets = 0;          // facets of parts thinner than a cell, wrapped in the shell too
+  double shell = 0;                     // half-thickness of the shell they are wrapped in (0: none)
   double diagonal = 0;
   double largest_gap = 0;               // between boundary edges of different loops (estimate)
   // grid
@@ -101,6 +109,7 @@ struct RebuildReport {
   // from it): open sheets and fins that enclose nothing. A component lost
   // whole is never certified: nothing is dropped silently.
   std::size_t lost_faces = 0, lost_components = 0;
+  std::size_t absorbed_faces = 0;  // far from the output but inside it (inner walls, enclosed parts)
   double lost_area_fraction = 0;
   // seconds
   double seconds_prepare = 0, seconds_octree = 0, seconds_winding = 0, seconds_extract = 0,
