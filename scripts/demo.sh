@@ -55,3 +55,10 @@ set +e
 code=$?
 set -e
 echo "(exit code $code)"
+echo
+echo "\$ polyheal rebuild fixtures/dirty_box.obj -o build/demo_box.obj --overwrite"
+set +e
+"$ph" rebuild "$root/fixtures/dirty_box.obj" -o "$root/build/demo_box.obj" --overwrite
+code=$?
+set -e
+echo "(exit code $code: 0 certified, 1 not certified or input lost, 2 error)"
