@@ -254,3 +254,14 @@ TEST_CASE("read: ASCII STL with several solids gives one group per solid", "[io]
                    "endloop\nendfacet\nendsolid x\n");
   CHECK(read_soup(one).face_group.empty());
 }
+
+TEST_CASE("read: a PLY face property naming the patch gives one group per patch", "[io]") {
+  const std::string path = scratch("patches.ply");
+  write_bytes(path,
+              "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\n"
+              "element face 3\nproperty list uchar int vertex_indices\nproperty int patch_id\nend_header\n"
+              "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1 7\n3 0 1 3 4\n3 1 2 3 7\n");
+  const Soup s = read_soup(path);
+  CHECK(s.group_names == std::vector<std::string>{"patch_id 7", "patch_id 4"});
+  CHECK(s.face_group == std::vector<std::int32_t>{0, 1, 0});
+}

@@ -325,7 +325,10 @@ TEST_CASE("rebuild: output faces keep the input's groups (CAD faces)", "[rebuild
   in.group_names = {"bottom", "top", "left", "right", "front", "back"};
   in.face_group.resize(in.face_count());
   for (std::size_t f = 0; f < in.face_count(); ++f) in.face_group[f] = std::int32_t((f / 2) % 6);
-  const RebuildResult result = rebuild(in);
+  RebuildOptions always;  // the patches weld into a clean box: rebuild it anyway
+  always.keep_clean = false;
+  const RebuildResult result = rebuild(in, always);
+  CHECK_FALSE(result.report.unchanged);
   CHECK(result.report.certified);
   CHECK(result.report.face_groups == 6);
   REQUIRE(result.soup.face_group.size() == result.soup.face_count());

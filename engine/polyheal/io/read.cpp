@@ -9,6 +9,7 @@
 #include <unistd.h>
 #include <cstdint>
 #include <cstring>
+#include <map>
 #include <filesystem>
 #include <unordered_map>
 
@@ -610,6 +611,12 @@ Soup parse_ply(std::string_view bytes, const std::string& name) {
     if (face->props[k].is_list && (face->props[k].name == "vertex_indices" || face->props[k].name == "vertex_index"))
       list = int(k);
   if (list < 0) throw InputError(name, "header", "PLY face lacks a 'vertex_indices' list");
+  // A scalar face property naming the CAD face (patch) each face belongs to.
+  int group_prop = -1;
+  for (std::size_t k = 0; k < face->props.size() && group_prop < 0; ++k)
+    for (const char* g : {"patch_id", "patch", "face_group", "group", "part", "region", "segment", "label"})
+      if (!face->props[k].is_list && face->props[k].name == g) group_prop = int(k);
+  std::map<long long, std::int32_t> group_of_value;
 
   Soup s;
   PlyBinary bin{bytes, static_cast<std::size_t>(t.p - bytes.data()), format == be, name};
@@ -654,6 +661,12 @@ Soup parse_ply(std::string_view bytes, const std::string& name) {
         if (!p.is_list) {
           double v = value(p.type, "value");
           if (is_vert) for (int a = 0; a < 3; ++a) if (int(k) == xyz[a]) pt[a] = v;
+          if (is_face && int(k) == group_prop) {
+            const long long id = std::llround(v);
+            const auto [it, inserted] = group_of_value.emplace(id, std::int32_t(s.group_names.size()));
+            if (inserted) s.group_names.push_back(face->props[k].name + " " + std::to_string(id));
+            s.face_group.push_back(it->second);
+          }
           continue;
         }
         double n = value(p.count_type, "list size");

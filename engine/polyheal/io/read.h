@@ -3,8 +3,10 @@
 // Every reader yields a polygon soup with the file's coordinates bit for bit
 // (doubles parsed with correct rounding, floats widened exactly). Formats:
 // OFF (OFF/COFF/NOFF/CNOFF/STOFF headers), OBJ (with `g` groups), STL (ASCII and
-// binary, told apart by content, not extension), PLY (ASCII, binary little and
-// big endian). STL triangles are welded on identical coordinates.
+// binary, told apart by content, not extension; several ASCII solids become
+// groups), PLY (ASCII, binary little and big endian; a scalar face property
+// patch_id/patch/face_group/group/part/region/segment/label becomes groups).
+// STL triangles are welded on identical coordinates.
 //
 // Errors: any malformed input throws InputError naming the file, the line
 // (text) or byte offset (binary) and the reason. Declared counts are checked
