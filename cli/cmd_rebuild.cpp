@@ -27,7 +27,8 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
       {"volume", r.volume},
       {"parameters",
        {{"cell", r.cell}, {"cell_rule", r.cell_rule}, {"feature_angle", a.options.feature_angle},
-        {"simplify", a.options.simplify}, {"keep_clean", a.options.keep_clean}, {"sheets", a.sheets}}},
+        {"simplify", a.options.simplify}, {"sharpen", a.options.sharpen}, {"keep_clean", a.options.keep_clean},
+        {"sheets", a.sheets}}},
       {"input_mesh",
        {{"faces", r.faces},
         {"vertices", r.vertices},
@@ -54,6 +55,7 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
        {{"extracted_faces", r.extracted_faces},
         {"planar_collapses", r.collapses},
         {"decimated", r.decimated},
+        {"sharpened", r.sharpened},
         {"faces", r.faces_out},
         {"vertices", r.vertices_out},
         {"components", r.components_out},
@@ -179,6 +181,8 @@ void add_rebuild(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-simplify{false}", args->options.simplify,
                 "keep every extracted triangle (no planar coarsening, no decimation)");
   cmd->add_flag("--always{false}", args->options.keep_clean, "rebuild even an input that is already clean");
+  cmd->add_flag("--no-sharpen{false}", args->options.sharpen,
+                "leave sharp edges chamfered (no moving of vertices onto the input's edges and corners)");
   cmd->add_option("--sheets", args->sheets,
                   "facets that bound no volume (open or double-sided sheets): 'shell' wraps them one cell thick on "
                   "each side (default), 'drop' leaves them out (reported lost)")

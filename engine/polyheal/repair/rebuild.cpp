@@ -770,10 +770,111 @@ class PlanarCoarsening {
 
 class BoundedDecimation {
  public:
-  BoundedDecimation(Mesh& mesh, double tolerance)
-      : mesh_(mesh), index_(mesh), tolerance_(tolerance) {
+  /// `reference`: the extracted surface the result must stay near.
+  BoundedDecimation(Mesh& mesh, const detail::SurfaceDistance& reference, double tolerance)
+      : mesh_(mesh), index_(mesh), reference_(reference), tolerance_(tolerance) {
     error_ = mesh_.add_property_map<face_descriptor, double>("f:rebuild_error", 0.0).first;
     for (vertex_descriptor v : mesh_.vertices()) at_.push_back(nearest_point3d(mesh_.point(v)));
+  }
+
+  /// §5, Fig. 15 (crisper edges from the facets' normals): a vertex whose
+  /// neighbourhood lies on facets of two planes meeting at more than the
+  /// feature angle moves onto their intersection line (its nearest point),
+  /// or, with a third independent plane, onto their common point — exact
+  /// constructions (Epeck), rounded once — when that is within `reach`, its
+  /// faces stay non-degenerate, turn less than 75 degrees, and intersect
+  /// nothing (the oracle's local query). Cube-marching chamfers become edges.
+  std::size_t sharpen(const Facets& f, Mesh::Property_map<vertex_descriptor, std::int64_t>& facet, double reach,
+                      double cos_feature) {
+    // The edge or corner must be one of the input's: the target lies on it.
+    std::vector<std::array<Point3d, 3>> all_facets;
+    for (const Tri& t : f.tris) all_facets.push_back({f.points[t[0]], f.points[t[1]], f.points[t[2]]});
+    const detail::SurfaceDistance input(all_facets);
+    const double on_input = 0.05 * reach;
+    const double cos_same = std::cos(10 * M_PI / 180);
+    std::vector<Point3d> unit(f.tris.size());
+    for (std::size_t t = 0; t < f.tris.size(); ++t) {
+      const Point3d n = normal(f.points[f.tris[t][0]], f.points[f.tris[t][1]], f.points[f.tris[t][2]]);
+      const double l = std::sqrt(dot(n, n));
+      unit[t] = {n[0] / l, n[1] / l, n[2] / l};
+    }
+    auto plane = [&](std::int64_t t) {
+      const Tri& tr = f.tris[std::size_t(t)];
+      auto P = [&](int k) { const Point3d& p = f.points[tr[k]]; return Point(p[0], p[1], p[2]); };
+      return Kernel::Plane_3(P(0), P(1), P(2));
+    };
+    std::size_t moved = 0;
+    std::vector<vertex_descriptor> all(mesh_.vertices().begin(), mesh_.vertices().end());
+    for (vertex_descriptor v : all) {
+      std::vector<std::int64_t> planes;
+      auto consider = [&](vertex_descriptor u) {
+        const std::int64_t t = facet[u];
+        if (t < 0) return;
+        for (std::int64_t p : planes)
+          if (dot(unit[std::size_t(p)], unit[std::size_t(t)]) > cos_same) return;
+        planes.push_back(t);
+      };
+      consider(v);
+      for (vertex_descriptor u : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_)) consider(u);
+      if (planes.size() < 2) continue;
+      const std::int64_t a = planes[0];
+      std::int64_t b = -1, c = -1;
+      for (std::int64_t p : planes)
+        if (b < 0 && dot(unit[std::size_t(a)], unit[std::size_t(p)]) < cos_feature) b = p;
+      if (b < 0) continue;
+      for (std::int64_t p : planes) {
+        if (p == a || p == b || c >= 0) continue;
+        const Point3d &na = unit[std::size_t(a)], &nb = unit[std::size_t(b)], &nc = unit[std::size_t(p)];
+        const double det = na[0] * (nb[1] * nc[2] - nb[2] * nc[1]) - na[1] * (nb[0] * nc[2] - nb[2] * nc[0]) +
+                           na[2] * (nb[0] * nc[1] - nb[1] * nc[0]);
+        if (std::abs(det) > 0.3) c = p;
+      }
+      Point target;
+      if (c >= 0) {
+        const auto hit = CGAL::intersection(plane(a), plane(b), plane(c));
+        const Point* p = hit ? boost::get<Point>(&*hit) : nullptr;
+        if (!p) continue;
+        target = *p;
+      } else {
+        const auto hit = CGAL::intersection(plane(a), plane(b));
+        const Kernel::Line_3* l = hit ? boost::get<Kernel::Line_3>(&*hit) : nullptr;
+        if (!l) continue;
+        target = l->projection(mesh_.point(v));
+      }
+      const Point3d x = nearest_point3d(target);
+      const Point3d& old = at(v);
+      const Point3d d{x[0] - old[0], x[1] - old[1], x[2] - old[2]};
+      if (dot(d, d) > reach * reach || dot(d, d) == 0) continue;
+      if (input.squared_distance(x) > on_input * on_input) continue;
+      std::vector<face_descriptor> star;
+      std::vector<std::array<vertex_descriptor, 3>> proposed;
+      bool ok = true;
+      for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
+        const vertex_descriptor p = mesh_.source(g), q = mesh_.target(mesh_.next(g));
+        const Point3d n_old = normal(at(p), old, at(q)), n_new = normal(at(p), x, at(q));
+        if (dot(n_old, n_new) <= 0.25 * std::sqrt(dot(n_old, n_old) * dot(n_new, n_new)) ||
+            CGAL::collinear(InputKernel::Point_3(at(p)[0], at(p)[1], at(p)[2]),
+                            InputKernel::Point_3(x[0], x[1], x[2]),
+                            InputKernel::Point_3(at(q)[0], at(q)[1], at(q)[2]))) {
+          ok = false;
+          break;
+        }
+        star.push_back(mesh_.face(g));
+        proposed.push_back({p, v, q});
+      }
+      if (!ok) continue;
+      const Point before = mesh_.point(v);
+      mesh_.point(v) = Point(x[0], x[1], x[2]);
+      if (index_.would_intersect(proposed, star)) {
+        mesh_.point(v) = before;
+        continue;
+      }
+      at_[static_cast<std::size_t>(v)] = x;
+      index_.update(star);
+      facet[v] = -1;  // on two planes now: it votes for no face group
+      ++moved;
+    }
+    return moved;
   }
 
   std::size_t run() {
@@ -855,6 +956,10 @@ class BoundedDecimation {
         c.proposed.push_back({a, u, b});
       }
       if (!ok || c.proposed.empty()) continue;
+      // Old star to new fan: the distance to the fan is convex on each old
+      // triangle, so its largest value is at a corner — v (d2), plus what
+      // the star's faces carried. New fan to the surface: sampled against
+      // the extracted surface itself below (no accumulation).
       c.error = carried + std::sqrt(d2);
       // Never make the worst triangle much worse than the star's (needles
       // are what TetGen and users stumble on).
@@ -865,11 +970,28 @@ class BoundedDecimation {
               [](const Candidate& a, const Candidate& b) { return a.quality > b.quality; });
     for (const Candidate& c : candidates) {
       if (!CGAL::Euler::does_satisfy_link_condition(mesh_.edge(c.h), mesh_)) continue;
+      if (!near_reference(c, limit)) continue;
       if (index_.would_intersect(c.proposed, star)) continue;
       apply(c, star);
       return true;
     }
     return false;
+  }
+
+  /// The new triangles' centroids and edge midpoints lie within `limit` of
+  /// the extracted surface (a measurement; the report's distances are
+  /// measured on the result).
+  bool near_reference(const Candidate& c, double limit) const {
+    for (const auto& t : c.proposed) {
+      const Point3d &p = at(t[0]), &q = at(t[1]), &w = at(t[2]);
+      const Point3d samples[4] = {{(p[0] + q[0] + w[0]) / 3, (p[1] + q[1] + w[1]) / 3, (p[2] + q[2] + w[2]) / 3},
+                                  {(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2},
+                                  {(q[0] + w[0]) / 2, (q[1] + w[1]) / 2, (q[2] + w[2]) / 2},
+                                  {(w[0] + p[0]) / 2, (w[1] + p[1]) / 2, (w[2] + p[2]) / 2}};
+      for (const Point3d& x : samples)
+        if (reference_.squared_distance(x) > limit * limit) return false;
+    }
+    return true;
   }
 
   void apply(const Candidate& c, const std::vector<face_descriptor>& star) {
@@ -890,6 +1012,7 @@ class BoundedDecimation {
 
   Mesh& mesh_;
   LocalIndex index_;
+  const detail::SurfaceDistance& reference_;
   double tolerance_;
   Mesh::Property_map<face_descriptor, double> error_;
   std::vector<Point3d> at_;
@@ -1228,13 +1351,20 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     if (obs) obs->stage("decimating");
     Mesh mesh;
     soup_to_mesh(out, mesh);
-    BoundedDecimation decimation(mesh, options.decimate_tolerance * r.cell);
-    r.decimated = decimation.run();
-    mesh.collect_garbage();
-    Soup decimated = mesh_to_soup(mesh);
-    // Collapses keep positions: each vertex finds its facet by its point.
     std::map<Point3d, std::int64_t> facet_at;
     for (std::size_t v = 0; v < vertices.size(); ++v) facet_at.emplace(out.points[v], vertices[v].facet);
+    auto facet = mesh.add_property_map<vertex_descriptor, std::int64_t>("v:rebuild_facet", -1).first;
+    for (vertex_descriptor v : mesh.vertices()) facet[v] = facet_at.at(nearest_point3d(mesh.point(v)));
+    const detail::SurfaceDistance reference(out);
+    BoundedDecimation decimation(mesh, reference, options.decimate_tolerance * r.cell);
+    if (options.sharpen)
+      r.sharpened = decimation.sharpen(f, facet, 0.75 * r.cell, std::cos(options.feature_angle * M_PI / 180));
+    r.decimated = decimation.run();
+    mesh.collect_garbage();
+    // Collapses keep a vertex's facet with its point.
+    facet_at.clear();
+    for (vertex_descriptor v : mesh.vertices()) facet_at[nearest_point3d(mesh.point(v))] = facet[v];
+    Soup decimated = mesh_to_soup(mesh);
     vertices.clear();
     for (const Point3d& p : decimated.points) vertices.push_back({p, facet_at.at(p)});
     out = std::move(decimated);

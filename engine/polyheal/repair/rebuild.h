@@ -64,6 +64,7 @@ struct RebuildOptions {
   bool simplify = true;        // collapse vertices inside planar regions (exact, surface unchanged)
   bool decimate = true;        // then collapse vertices elsewhere, within decimate_tolerance (see below)
   double decimate_tolerance = 0.25;  // fraction of the cell: distance of new faces to the extracted surface
+  bool sharpen = true;         // move vertices near sharp edges and corners onto them (before decimating)
   bool certify = true;         // inspect the result and measure the Hausdorff distance
   std::size_t max_cells = 20'000'000;  // refuse a finer grid (UnsupportedInput)
   Observer* observer = nullptr;
@@ -97,6 +98,7 @@ struct RebuildReport {
   std::size_t extracted_faces = 0;      // before simplification
   std::size_t collapses = 0;            // planar vertices removed
   std::size_t decimated = 0;            // vertices removed by decimation
+  std::size_t sharpened = 0;            // vertices moved onto sharp edges and corners
   std::size_t faces_out = 0, vertices_out = 0, components_out = 0, face_groups = 0;
   // certification (of the result as rounded to doubles)
   bool certified = false;
