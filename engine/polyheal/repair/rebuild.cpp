@@ -775,6 +775,7 @@ class BoundedDecimation {
       : mesh_(mesh), index_(mesh), reference_(reference), tolerance_(tolerance) {
     error_ = mesh_.add_property_map<face_descriptor, double>("f:rebuild_error", 0.0).first;
     for (vertex_descriptor v : mesh_.vertices()) at_.push_back(nearest_point3d(mesh_.point(v)));
+    moved_.assign(at_.size(), 0);
   }
 
   /// §5, Fig. 15 (crisper edges from the facets' normals): a vertex whose
@@ -870,6 +871,7 @@ class BoundedDecimation {
         continue;
       }
       at_[static_cast<std::size_t>(v)] = x;
+      moved_[static_cast<std::size_t>(v)] = 1;  // off the extracted surface now
       index_.update(star);
       facet[v] = -1;  // on two planes now: it votes for no face group
       ++moved;
@@ -984,12 +986,21 @@ class BoundedDecimation {
   bool near_reference(const Candidate& c, double limit) const {
     for (const auto& t : c.proposed) {
       const Point3d &p = at(t[0]), &q = at(t[1]), &w = at(t[2]);
+      // Every point of a triangle is within its longest edge of each corner:
+      // a small triangle with its corners on the surface needs no samples.
+      if (!moved_[static_cast<std::size_t>(t[0])] && !moved_[static_cast<std::size_t>(t[1])] &&
+          !moved_[static_cast<std::size_t>(t[2])]) {
+        auto d2 = [](const Point3d& x, const Point3d& y) {
+          return (x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2]);
+        };
+        if (std::max({d2(p, q), d2(q, w), d2(w, p)}) <= limit * limit) continue;
+      }
       const Point3d samples[4] = {{(p[0] + q[0] + w[0]) / 3, (p[1] + q[1] + w[1]) / 3, (p[2] + q[2] + w[2]) / 3},
                                   {(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2},
                                   {(q[0] + w[0]) / 2, (q[1] + w[1]) / 2, (q[2] + w[2]) / 2},
                                   {(w[0] + p[0]) / 2, (w[1] + p[1]) / 2, (w[2] + p[2]) / 2}};
-      for (const Point3d& x : samples)
-        if (reference_.squared_distance(x) > limit * limit) return false;
+      for (const Point3d& x : samples)  // a corner is on (or by) the surface: it seeds the search
+        if (reference_.squared_distance(x, p) > limit * limit) return false;
     }
     return true;
   }
@@ -1014,6 +1025,7 @@ class BoundedDecimation {
   LocalIndex index_;
   const detail::SurfaceDistance& reference_;
   double tolerance_;
+  std::vector<char> moved_;  // per vertex: sharpened, so no longer on the extracted surface
   Mesh::Property_map<face_descriptor, double> error_;
   std::vector<Point3d> at_;
 };

@@ -33,10 +33,11 @@
 // facets carry (OBJ groups, STL solids), or else by a feature angle.
 // Planar regions are coarsened exactly: a vertex whose whole star lies in
 // one plane is collapsed away when the fan that replaces it tiles the same
-// polygon (the surface, as a point set, is unchanged). The rest is decimated
-// by halfedge collapses within a quarter cell of the extracted surface, each
-// checked exactly for self-intersection by the oracle's local query (§5:
-// fewer faces).
+// polygon (the surface, as a point set, is unchanged). Vertices near sharp
+// edges and corners of the input move onto them (§5 Fig. 15: the facet
+// planes' exact intersection). The rest is decimated by halfedge collapses
+// within a quarter cell of the extracted surface, each checked exactly for
+// self-intersection by the oracle's local query (§5: fewer faces).
 // Facets that bound no volume — the winding number is at most 1/2 on both
 // sides: open sheets, double-sided sheets, stray triangles — are wrapped in a
 // shell one cell thick on each side (`sheets`), so that no part of the input
