@@ -40,6 +40,26 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+double dot(const Point3d& a, const Point3d& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+/// (b - a) x (c - a): twice the triangle's area vector (doubles; a measurement).
+Point3d normal(const Point3d& a, const Point3d& b, const Point3d& c) {
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  return {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+}
+
+/// 1 - cos of the triangle's smallest angle (larger is better; a measurement).
+double min_angle_quality(const Point3d& a, const Point3d& b, const Point3d& c) {
+  const Point3d* p[3] = {&a, &b, &c};
+  double worst = HUGE_VAL;
+  for (int k = 0; k < 3; ++k) {
+    const Point3d &o = *p[k], &x = *p[(k + 1) % 3], &y = *p[(k + 2) % 3];
+    const Point3d u{x[0] - o[0], x[1] - o[1], x[2] - o[2]}, w{y[0] - o[0], y[1] - o[1], y[2] - o[2]};
+    worst = std::min(worst, 1 - dot(u, w) / std::sqrt(dot(u, u) * dot(w, w)));
+  }
+  return worst;
+}
+
 IPoint ipoint(const Point3d& p) { return {p[0], p[1], p[2]}; }
 
 double dist(const Point3d& a, const Point3d& b) {
@@ -289,17 +309,9 @@ class WindingNumber {
     Point3d lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
     for (std::size_t i = first; i < last; ++i) {
       const std::size_t t = order_[i];
-      double u[3], v[3];
-      for (int a = 0; a < 3; ++a) {
-        u[a] = P(t, 1)[a] - P(t, 0)[a];
-        v[a] = P(t, 2)[a] - P(t, 0)[a];
-      }
-      const double nx = 0.5 * (u[1] * v[2] - u[2] * v[1]), ny = 0.5 * (u[2] * v[0] - u[0] * v[2]),
-                   nz = 0.5 * (u[0] * v[1] - u[1] * v[0]);
-      const double A = std::sqrt(nx * nx + ny * ny + nz * nz);
-      n.normal[0] += nx;
-      n.normal[1] += ny;
-      n.normal[2] += nz;
+      const Point3d m = normal(P(t, 0), P(t, 1), P(t, 2));
+      const double A = 0.5 * std::sqrt(dot(m, m));
+      for (int a = 0; a < 3; ++a) n.normal[a] += 0.5 * m[a];
       area += A;
       for (int a = 0; a < 3; ++a) {
         n.center[a] += A * centroid_[t][a];
@@ -710,7 +722,7 @@ class PlanarCoarsening {
           ok = false;
           break;
         }
-        quality = std::min(quality, min_angle_cos_complement(pa, pu, pc));
+        quality = std::min(quality, min_angle_quality(pa, pu, pc));
       }
       if (ok && quality > best_quality && CGAL::Euler::does_satisfy_link_condition(mesh_.edge(h), mesh_)) {
         best_quality = quality;
@@ -726,20 +738,6 @@ class PlanarCoarsening {
     facet_[kept] = facet_[u];
     on_plane_[kept] = 1;
     return kept;
-  }
-
-  /// 1 - cos of the triangle's smallest angle (larger is better).
-  static double min_angle_cos_complement(const Point3d& a, const Point3d& b, const Point3d& c) {
-    const Point3d* p[3] = {&a, &b, &c};
-    double worst = HUGE_VAL;
-    for (int k = 0; k < 3; ++k) {
-      const Point3d &o = *p[k], &x = *p[(k + 1) % 3], &y = *p[(k + 2) % 3];
-      const double u[3] = {x[0] - o[0], x[1] - o[1], x[2] - o[2]}, w[3] = {y[0] - o[0], y[1] - o[1], y[2] - o[2]};
-      const double nu = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]),
-                   nw = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-      worst = std::min(worst, 1 - (u[0] * w[0] + u[1] * w[1] + u[2] * w[2]) / (nu * nw));
-    }
-    return worst;
   }
 
   static constexpr std::size_t kMaxValence = 24;
@@ -906,24 +904,6 @@ class BoundedDecimation {
 
   const Point3d& at(vertex_descriptor v) const { return at_[static_cast<std::size_t>(v)]; }
 
-  static Point3d normal(const Point3d& a, const Point3d& b, const Point3d& c) {
-    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    return {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-  }
-  static double dot(const Point3d& a, const Point3d& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-
-  /// Smallest angle's sine-like measure: 1 - cos of the smallest angle.
-  static double quality(const Point3d& a, const Point3d& b, const Point3d& c) {
-    const Point3d* p[3] = {&a, &b, &c};
-    double worst = HUGE_VAL;
-    for (int k = 0; k < 3; ++k) {
-      const Point3d &o = *p[k], &x = *p[(k + 1) % 3], &y = *p[(k + 2) % 3];
-      const Point3d u{x[0] - o[0], x[1] - o[1], x[2] - o[2]}, w{y[0] - o[0], y[1] - o[1], y[2] - o[2]};
-      worst = std::min(worst, 1 - dot(u, w) / std::sqrt(dot(u, u) * dot(w, w)));
-    }
-    return worst;
-  }
-
   bool try_collapse(vertex_descriptor v, double limit) {
     std::vector<face_descriptor> star;
     double carried = 0, old_quality = HUGE_VAL;
@@ -931,7 +911,7 @@ class BoundedDecimation {
       const face_descriptor f = mesh_.face(g);
       star.push_back(f);
       carried = std::max(carried, error_[f]);
-      old_quality = std::min(old_quality, quality(at(mesh_.source(g)), at(v), at(mesh_.target(mesh_.next(g)))));
+      old_quality = std::min(old_quality, min_angle_quality(at(mesh_.source(g)), at(v), at(mesh_.target(mesh_.next(g)))));
     }
     if (carried >= limit) return false;
     std::vector<Candidate> candidates;
@@ -953,7 +933,7 @@ class BoundedDecimation {
           ok = false;
           break;
         }
-        c.quality = std::min(c.quality, quality(pa, pu, pb));
+        c.quality = std::min(c.quality, min_angle_quality(pa, pu, pb));
         d2 = std::min(d2, detail::squared_distance_to_triangle(at(v), pa, pu, pb));
         c.proposed.push_back({a, u, b});
       }
@@ -1057,15 +1037,13 @@ std::size_t group_faces(const Facets& f, const Soup& input, const std::vector<Ou
       if (g >= 0) used[std::size_t(g)] = 1;
     return std::size_t(std::count(used.begin(), used.end(), 1));
   }
-  std::vector<Point3d> normal(n);
+  std::vector<Point3d> unit(n);
   for (std::size_t t = 0; t < n; ++t) {
     const FaceView v = out.face(t);
-    const Point3d &a = out.points[v[0]], &b = out.points[v[1]], &c = out.points[v[2]];
-    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    Point3d m{u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-    const double len = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+    Point3d m = normal(out.points[v[0]], out.points[v[1]], out.points[v[2]]);
+    const double len = std::sqrt(dot(m, m));
     for (double& x : m) x = len > 0 ? x / len : 0;
-    normal[t] = m;
+    unit[t] = m;
   }
   const double cos_feature = std::cos(feature_angle * M_PI / 180);
   std::unordered_map<std::uint64_t, std::size_t> first_use;
@@ -1077,8 +1055,8 @@ std::size_t group_faces(const Facets& f, const Soup& input, const std::vector<Ou
       if (a > b) std::swap(a, b);
       const auto [it, inserted] = first_use.emplace((std::uint64_t(a) << 32) | b, t);
       if (inserted) continue;
-      const Point3d &p = normal[it->second], &q = normal[t];
-      if (p[0] * q[0] + p[1] * q[1] + p[2] * q[2] >= cos_feature) regions.unite(it->second, t);
+      const Point3d &p = unit[it->second], &q = unit[t];
+      if (dot(p, q) >= cos_feature) regions.unite(it->second, t);
     }
   }
   std::unordered_map<std::size_t, std::int32_t> id;
@@ -1187,9 +1165,8 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     f.sheet.assign(f.tris.size(), 0);
     tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
       const Point3d &a = f.points[f.tris[t][0]], &b = f.points[f.tris[t][1]], &c = f.points[f.tris[t][2]];
-      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-      double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-      const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      const Point3d n = normal(a, b, c);
+      const double len = std::sqrt(dot(n, n));
       if (!(len > 0)) return;
       const double e = 0.05 * g.h / len;
       Point3d front, back;
@@ -1418,12 +1395,8 @@ void count_lost(const Soup& input, const Soup& written, double far, RebuildRepor
     const FaceView v = welded.face(f);
     double a = 0;
     for (std::size_t k = 1; k + 1 < v.size(); ++k) {
-      const Point3d n = [&] {
-        const Point3d &p = welded.points[v[0]], &q = welded.points[v[k]], &w = welded.points[v[k + 1]];
-        const double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]}, x[3] = {w[0] - p[0], w[1] - p[1], w[2] - p[2]};
-        return Point3d{u[1] * x[2] - u[2] * x[1], u[2] * x[0] - u[0] * x[2], u[0] * x[1] - u[1] * x[0]};
-      }();
-      a += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      const Point3d n = normal(welded.points[v[0]], welded.points[v[k]], welded.points[v[k + 1]]);
+      a += 0.5 * std::sqrt(dot(n, n));
     }
     area += a;
     bool far_away = true;
