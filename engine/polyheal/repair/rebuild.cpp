@@ -157,9 +157,9 @@ Facets prepare(const Soup& input, RebuildReport& r) {
 /// Largest gap between boundary edges of different boundary loops (§3.1.3),
 /// among gaps below `limit` (wider openings are holes, filled by the winding
 /// number's 1/2 level whatever the cell size). Two loops are across a gap
-/// when the point halfway between them is off the surface (an empty slit);
+/// when the point halfway between them is off `surface` (the facets; an empty slit);
 /// two holes with surface between them are not.
-double largest_gap(const Facets& f, double limit) {
+double largest_gap(const Facets& f, const detail::SurfaceDistance& surface, double limit) {
   std::unordered_map<std::uint64_t, int> count;
   for (const Tri& t : f.tris)
     for (int k = 0; k < 3; ++k) {
@@ -180,9 +180,6 @@ double largest_gap(const Facets& f, double limit) {
   using Primitive = CGAL::AABB_segment_primitive<IK, std::vector<Segment>::const_iterator>;
   using Tree = CGAL::AABB_tree<CGAL::AABB_traits<IK, Primitive>>;
   Tree tree(segments.begin(), segments.end());
-  std::vector<std::array<Point3d, 3>> facets;
-  for (const Tri& t : f.tris) facets.push_back({f.points[t[0]], f.points[t[1]], f.points[t[2]]});
-  const detail::SurfaceDistance surface(facets);
   std::vector<double> gap(edges.size(), 0);
   tbb::parallel_for(std::size_t(0), edges.size(), [&](std::size_t i) {
     const Point3d &a = f.points[edges[i][0]], &b = f.points[edges[i][1]];
@@ -783,12 +780,10 @@ class BoundedDecimation {
   /// constructions (Epeck), rounded once — when that is within `reach`, its
   /// faces stay non-degenerate, turn less than 75 degrees, and intersect
   /// nothing (the oracle's local query). Cube-marching chamfers become edges.
-  std::size_t sharpen(const Facets& f, Mesh::Property_map<vertex_descriptor, std::int64_t>& facet, double reach,
-                      double cos_feature) {
-    // The edge or corner must be one of the input's: the target lies on it.
-    std::vector<std::array<Point3d, 3>> all_facets;
-    for (const Tri& t : f.tris) all_facets.push_back({f.points[t[0]], f.points[t[1]], f.points[t[2]]});
-    const detail::SurfaceDistance input(all_facets);
+  /// `input`: the facets of `f`. The edge or corner must be one of the
+  /// input's: the target lies on it.
+  std::size_t sharpen(const Facets& f, const detail::SurfaceDistance& input,
+                      Mesh::Property_map<vertex_descriptor, std::int64_t>& facet, double reach, double cos_feature) {
     const double on_input = 0.05 * reach;
     const double cos_same = std::cos(10 * M_PI / 180);
     std::vector<Point3d> unit(f.tris.size());
@@ -1107,7 +1102,11 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     return result;
   }
   r.diagonal = dist(lo, hi);
-  r.largest_gap = largest_gap(f, 0.02 * r.diagonal);
+  // The facets as a surface to measure against (gaps, sharpening).
+  std::vector<std::array<Point3d, 3>> facet_corners;
+  for (const Tri& t : f.tris) facet_corners.push_back({f.points[t[0]], f.points[t[1]], f.points[t[2]]});
+  const detail::SurfaceDistance input_surface(facet_corners);
+  r.largest_gap = largest_gap(f, input_surface, 0.02 * r.diagonal);
   if (options.cell > 0) {
     r.cell = options.cell;
     r.cell_rule = "--cell";
@@ -1347,7 +1346,8 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     const detail::SurfaceDistance reference(out);
     BoundedDecimation decimation(mesh, reference, options.decimate_tolerance * r.cell);
     if (options.sharpen)
-      r.sharpened = decimation.sharpen(f, facet, 0.75 * r.cell, std::cos(options.feature_angle * M_PI / 180));
+      r.sharpened =
+          decimation.sharpen(f, input_surface, facet, 0.75 * r.cell, std::cos(options.feature_angle * M_PI / 180));
     r.decimated = decimation.run();
     mesh.collect_garbage();
     // Collapses keep a vertex's facet with its point.
