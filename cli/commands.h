@@ -28,4 +28,10 @@ void add_union(CLI::App& app, int& exit_code);
 /// Adds `rebuild` (Hu, Lee, Blacker & Zhu overlay-grid cleanup).
 void add_rebuild(CLI::App& app, int& exit_code);
 
+/// Adds `repair` (the automatic pipeline).
+void add_repair(CLI::App& app, int& exit_code);
+
+/// Adds `compare` (another tool's output against its input).
+void add_compare(CLI::App& app, int& exit_code);
+
 }  // namespace polyheal::cli

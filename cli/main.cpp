@@ -14,7 +14,9 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "polyheal 0.1.0");
   int exit_code = kError;
+  add_repair(app, exit_code);
   add_check(app, exit_code);
+  add_compare(app, exit_code);
   add_degenerate(app, exit_code);
   add_deintersect(app, exit_code);
   add_regularize(app, exit_code);

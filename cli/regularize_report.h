@@ -12,32 +12,10 @@
 
 #include "polyheal/repair/regularize.h"
 #include "progress.h"
+#include "report_json.h"
 #include "repair_command.h"
 
 namespace polyheal::cli {
-
-inline double peak_memory_mb() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_maxrss) / 1024.0;  // Linux: kilobytes
-}
-
-/// What keeps the written file from being certified, one phrase each.
-inline std::vector<std::string> defects(const Report& out) {
-  std::vector<std::string> d;
-  auto add = [&](std::size_t n, const char* what) {
-    if (n) d.push_back(std::to_string(n) + " " + what);
-  };
-  add(out.boundary_edges.size(), "boundary edges");
-  add(out.nonmanifold_edges.size(), "non-manifold edges");
-  add(out.nonmanifold_vertices.size(), "non-manifold vertices");
-  add(out.misoriented_edges.size(), "misoriented edges");
-  add(out.degenerate_faces.size(), "degenerate faces");
-  add(out.duplicate_faces.size(), "duplicate faces");
-  add(out.self_intersections.size(), "intersecting pairs");
-  if (out.faces == 0) d.push_back("no face left");
-  return d;
-}
 
 inline nlohmann::json regularize_json(const RepairFiles& a, const RegularizeReport& r, double read_s, double write_s) {
   const double diag = r.bbox_diagonal > 0 ? r.bbox_diagonal : 1.0;

@@ -184,21 +184,12 @@ void refuse_to_clobber(const std::string& input, const std::string& output, bool
     throw OutputError(output + ": is the input file; refusing to overwrite it (pass --overwrite to allow)");
 }
 
-WriteInfo write_soup(const Soup& soup, const std::string& path, const WriteOptions& options) {
-  WriteInfo info;
-  try {
-    info.format = format_from_path(path);
-  } catch (const InputError& e) {
-    throw OutputError(e.what());
-  }
+void write_file_atomically(const std::string& path, const std::string& data, bool allow_overwrite) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (fs::is_directory(path, ec)) throw OutputError(path + ": is a directory");
-  if (!options.allow_overwrite && fs::exists(path, ec))
+  if (!allow_overwrite && fs::exists(path, ec))
     throw OutputError(path + ": exists; refusing to overwrite it (pass --overwrite to allow)");
-  const std::string data = serialize_soup(soup, info.format, options.ascii, &info.coordinates_rounded);
-  info.bytes = data.size();
-
   fs::path target(path);
   fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   std::string tmpl = (dir / ("." + target.filename().string() + ".polyheal-XXXXXX")).string();
@@ -229,6 +220,23 @@ WriteInfo write_soup(const Soup& soup, const std::string& path, const WriteOptio
     ::unlink(tmpl.c_str());
     throw OutputError(path + ": cannot move the written file into place: " + why);
   }
+}
+
+WriteInfo write_soup(const Soup& soup, const std::string& path, const WriteOptions& options) {
+  WriteInfo info;
+  try {
+    info.format = format_from_path(path);
+  } catch (const InputError& e) {
+    throw OutputError(e.what());
+  }
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw OutputError(path + ": is a directory");
+  if (!options.allow_overwrite && fs::exists(path, ec))
+    throw OutputError(path + ": exists; refusing to overwrite it (pass --overwrite to allow)");
+  const std::string data = serialize_soup(soup, info.format, options.ascii, &info.coordinates_rounded);
+  info.bytes = data.size();
+  write_file_atomically(path, data, options.allow_overwrite);
   return info;
 }
 

@@ -35,6 +35,11 @@ std::string serialize_soup(const Soup& soup, Format format, bool ascii, bool* ro
 /// an I/O failure; the target is then untouched.
 WriteInfo write_soup(const Soup& soup, const std::string& path, const WriteOptions& options = {});
 
+/// Writes `data` to `path` atomically (a temporary file in the target
+/// directory, fsync, rename): reports, certificates, provenance files.
+/// Throws OutputError as write_soup does.
+void write_file_atomically(const std::string& path, const std::string& data, bool allow_overwrite);
+
 /// Throws OutputError when `output` names the same file as `input`, unless
 /// `allow` is set: a repair must never clobber its input by accident.
 void refuse_to_clobber(const std::string& input, const std::string& output, bool allow);

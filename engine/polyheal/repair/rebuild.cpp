@@ -1366,12 +1366,8 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   return result;
 }
 
-namespace {
-
-/// Input faces whose corners are all farther than `far` from `written` and
-/// that lie outside it (lost) or inside it (absorbed), and the input
-/// components made only of lost faces.
-void count_lost(const Soup& input, const Soup& written, double far, RebuildReport& r) {
+Loss measure_loss(const Soup& input, const Soup& written, double far) {
+  Loss loss;
   const Soup welded = apply_weld(input, weld_identical_points(input.points));
   const Topology topo = analyze_topology(welded);
   const detail::SurfaceDistance to_output(written);
@@ -1388,9 +1384,9 @@ void count_lost(const Soup& input, const Soup& written, double far, RebuildRepor
     for (std::size_t k = 1; k + 1 < v.size(); ++k) out.tris.push_back({v[0], v[k], v[k + 1]});
   }
   const WindingNumber inside_output(out);
-  std::vector<char> kept(topo.components, 0);
+  std::vector<char> near(topo.components, 0), absorbed(topo.components, 0);
+  loss.absorbed.assign(welded.face_count(), 0);
   double area = 0, lost_area = 0;
-  r.lost_faces = r.absorbed_faces = 0;
   for (std::size_t f = 0; f < welded.face_count(); ++f) {
     const FaceView v = welded.face(f);
     double a = 0;
@@ -1401,26 +1397,27 @@ void count_lost(const Soup& input, const Soup& written, double far, RebuildRepor
     area += a;
     bool far_away = true;
     for (Index i : v) far_away = far_away && is_far[i];
-    if (far_away) {
-      Point3d c{0, 0, 0};
-      for (Index i : v)
-        for (int k = 0; k < 3; ++k) c[k] += welded.points[i][k] / double(v.size());
-      if (inside_output(c) > 0.5) {
-        ++r.absorbed_faces;
-        kept[topo.face_component[f]] = 1;
-      } else {
-        ++r.lost_faces;
-        lost_area += a;
-      }
+    if (!far_away) {
+      near[topo.face_component[f]] = 1;
+      continue;
+    }
+    Point3d c{0, 0, 0};
+    for (Index i : v)
+      for (int k = 0; k < 3; ++k) c[k] += welded.points[i][k] / double(v.size());
+    if (inside_output(c) > 0.5) {
+      ++loss.absorbed_faces;
+      loss.absorbed[f] = 1;
+      absorbed[topo.face_component[f]] = 1;
     } else {
-      kept[topo.face_component[f]] = 1;
+      ++loss.lost_faces;
+      lost_area += a;
     }
   }
-  r.lost_components = std::size_t(std::count(kept.begin(), kept.end(), 0));
-  r.lost_area_fraction = area > 0 ? lost_area / area : 0;
+  for (std::size_t c = 0; c < topo.components; ++c)
+    if (!near[c]) ++(absorbed[c] ? loss.absorbed_components : loss.lost_components);
+  loss.lost_area_fraction = area > 0 ? lost_area / area : 0;
+  return loss;
 }
-
-}  // namespace
 
 void certify_rebuild(const Soup& input, const Soup& written, RebuildReport& r) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -1443,7 +1440,11 @@ void certify_rebuild(const Soup& input, const Soup& written, RebuildReport& r) {
     r.input_to_output = d[0];
     r.output_to_input = d[1];
     r.hausdorff = std::max(d[0], d[1]);
-    count_lost(input, written, r.cell > 0 ? 2 * r.cell : 0.02 * r.diagonal, r);
+    const Loss loss = measure_loss(input, written, r.cell > 0 ? 2 * r.cell : 0.02 * r.diagonal);
+    r.lost_faces = loss.lost_faces;
+    r.absorbed_faces = loss.absorbed_faces;
+    r.lost_components = loss.lost_components;
+    r.lost_area_fraction = loss.lost_area_fraction;
   }
   r.certified = r.certified && r.lost_components == 0;
   r.seconds_certify = seconds_since(t0);

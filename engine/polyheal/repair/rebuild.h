@@ -132,6 +132,20 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options = {});
 /// `input`: fills the report's certification fields. Certified: closed,
 /// 2-manifold, oriented, no degenerate face or self-intersection, some volume,
 /// and no input component lost.
+/// Input faces whose corners are all farther than `far` from `written`,
+/// split by whether they lie outside the written surface's volume (lost) or
+/// inside it (absorbed: inner walls, enclosed parts; generalised winding
+/// number of the written faces); and the input components none of whose
+/// faces is within `far`, split the same way (absorbed when some of their
+/// faces are inside). A measurement in doubles, not a certificate.
+struct Loss {
+  std::size_t lost_faces = 0, absorbed_faces = 0;
+  std::size_t lost_components = 0, absorbed_components = 0;
+  double lost_area_fraction = 0;
+  std::vector<char> absorbed;  // per input face
+};
+Loss measure_loss(const Soup& input, const Soup& written, double far);
+
 void certify_rebuild(const Soup& input, const Soup& written, RebuildReport& report);
 
 }  // namespace polyheal

@@ -1,0 +1,325 @@
+// polyheal — soup-level cleanup (see clean_soup.h).
+#include "polyheal/repair/clean_soup.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Exact_rational.h>
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/stitch_borders.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numeric>
+#include <unordered_map>
+
+#include "polyheal/mesh/union_find.h"
+#include "polyheal/mesh/weld.h"
+
+namespace polyheal {
+namespace {
+
+namespace PMP = CGAL::Polygon_mesh_processing;
+using K = CGAL::Epick;  // combinatorics only: no coordinate is constructed
+using P3 = K::Point_3;
+using SMesh = CGAL::Surface_mesh<P3>;
+using Tri = std::array<Index, 3>;
+
+std::uint64_t edge_key(Index a, Index b) {
+  if (a > b) std::swap(a, b);
+  return (std::uint64_t(a) << 32) | b;
+}
+
+/// Representatives after merging points closer than `d` (a grid of cell d;
+/// clusters by union-find, so a chain can move a point further than d: the
+/// report states the largest move). The representative is the cluster's
+/// first point.
+std::vector<Index> weld_near(const std::vector<Point3d>& pts, const std::vector<Index>& identical, double d,
+                             std::size_t& merged, double& max_move) {
+  UnionFind uf(pts.size());
+  std::unordered_map<std::uint64_t, std::vector<Index>> grid;
+  auto cell = [&](double x) { return std::int64_t(std::floor(x / d)); };
+  auto key = [](std::int64_t i, std::int64_t j, std::int64_t k) {
+    return (std::uint64_t(i & 0x1FFFFF) << 42) | (std::uint64_t(j & 0x1FFFFF) << 21) | std::uint64_t(k & 0x1FFFFF);
+  };
+  for (Index v = 0; v < pts.size(); ++v) {
+    if (identical[v] != v) continue;
+    const std::int64_t ci = cell(pts[v][0]), cj = cell(pts[v][1]), ck = cell(pts[v][2]);
+    for (std::int64_t i = ci - 1; i <= ci + 1; ++i)
+      for (std::int64_t j = cj - 1; j <= cj + 1; ++j)
+        for (std::int64_t k = ck - 1; k <= ck + 1; ++k) {
+          auto it = grid.find(key(i, j, k));
+          if (it == grid.end()) continue;
+          for (Index w : it->second) {
+            double s = 0;
+            for (int c = 0; c < 3; ++c) s += (pts[v][c] - pts[w][c]) * (pts[v][c] - pts[w][c]);
+            if (s <= d * d) uf.unite(v, w);
+          }
+        }
+    grid[key(ci, cj, ck)].push_back(v);
+  }
+  std::vector<Index> first(pts.size(), Index(-1)), rep(pts.size());
+  for (Index v = 0; v < pts.size(); ++v) {
+    const Index root = Index(uf.find(identical[v]));
+    if (first[root] == Index(-1)) first[root] = identical[v];
+    rep[v] = first[root];
+  }
+  merged = 0;
+  max_move = 0;
+  for (Index v = 0; v < pts.size(); ++v) {
+    if (identical[v] != v || rep[v] == v) continue;
+    ++merged;
+    double s = 0;
+    for (int c = 0; c < 3; ++c) s += (pts[v][c] - pts[rep[v]][c]) * (pts[v][c] - pts[rep[v]][c]);
+    max_move = std::max(max_move, std::sqrt(s));
+  }
+  return rep;
+}
+
+/// Sign of the volume a closed triangle set encloses, exactly (the input
+/// coordinates are doubles; the sum of determinants is rational).
+int volume_sign(const std::vector<P3>& pts, const std::vector<std::vector<std::size_t>>& polys,
+                const std::vector<std::size_t>& faces) {
+  CGAL::Exact_rational v = 0;
+  for (std::size_t f : faces) {
+    const P3 &a = pts[polys[f][0]], &b = pts[polys[f][1]], &c = pts[polys[f][2]];
+    const CGAL::Exact_rational ax = a.x(), ay = a.y(), az = a.z(), bx = b.x(), by = b.y(), bz = b.z(), cx = c.x(),
+                               cy = c.y(), cz = c.z();
+    v += ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
+  }
+  return CGAL::sign(v);
+}
+
+/// Whether polygon p runs through triangle t's corners in t's order;
+/// compared by position, since orient_polygon_soup renumbers the copies it
+/// makes of non-manifold points.
+bool same_cycle(const std::vector<P3>& pts, const std::vector<std::size_t>& p, const Tri& t) {
+  for (int r = 0; r < 3; ++r)
+    if (pts[p[0]] == pts[t[r]] && pts[p[1]] == pts[t[(r + 1) % 3]] && pts[p[2]] == pts[t[(r + 2) % 3]]) return true;
+  return false;
+}
+
+}  // namespace
+
+CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
+  CleanSoupResult result;
+  CleanSoupReport& r = result.report;
+  r.faces_in = input.face_count();
+
+  // Weld: identical points always, near points on request.
+  const Weld weld = weld_identical_points(input.points);
+  r.identical_vertices_welded = weld.merged;
+  std::vector<Index> rep = weld.representative;
+  if (o.weld > 0) rep = weld_near(input.points, weld.representative, o.weld, r.near_vertices_welded, r.max_weld_move);
+
+  // Fan polygons; drop faces that repeat an index.
+  std::vector<Tri> tris;
+  std::vector<std::int64_t> source;
+  for (std::size_t f = 0; f < input.face_count(); ++f) {
+    const FaceView v = input.face(f);
+    if (v.size() > 3) ++r.polygons_fanned;
+    for (std::size_t k = 1; k + 1 < v.size(); ++k) {
+      const Tri t{rep[v[0]], rep[v[k]], rep[v[k + 1]]};
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+        ++r.repeated_index_faces;
+        continue;
+      }
+      tris.push_back(t);
+      source.push_back(std::int64_t(f));
+    }
+  }
+
+  // Duplicates: copies of one vertex set. Opposite copies cancel in pairs
+  // (their winding-number contributions do); of what remains, one copy of
+  // the prevailing orientation is kept.
+  {
+    std::unordered_map<std::uint64_t, std::vector<std::size_t>> by_set;  // hashed; exact comparison below
+    auto sorted = [](Tri t) {
+      std::sort(t.begin(), t.end());
+      return t;
+    };
+    for (std::size_t i = 0; i < tris.size(); ++i) {
+      const Tri s = sorted(tris[i]);
+      by_set[(std::uint64_t(s[0]) * 0x9E3779B97F4A7C15ull) ^ (std::uint64_t(s[1]) << 21) ^ s[2]].push_back(i);
+    }
+    std::vector<char> keep(tris.size(), 1);
+    for (auto& [h, list] : by_set) {
+      if (list.size() < 2) continue;
+      std::vector<char> done(list.size(), 0);
+      for (std::size_t a = 0; a < list.size(); ++a) {
+        if (done[a]) continue;
+        const Tri s = sorted(tris[list[a]]);
+        std::vector<std::size_t> copies;
+        for (std::size_t b = a; b < list.size(); ++b)
+          if (!done[b] && sorted(tris[list[b]]) == s) {
+            done[b] = 1;
+            copies.push_back(list[b]);
+          }
+        if (copies.size() < 2) continue;
+        auto parity = [&](std::size_t i) {  // +1 when the cycle is (s0 s1 s2), -1 when reversed
+          const Tri& t = tris[i];
+          const int r0 = int(std::find(t.begin(), t.end(), s[0]) - t.begin());
+          return t[(r0 + 1) % 3] == s[1] ? 1 : -1;
+        };
+        int net = 0;
+        for (std::size_t i : copies) net += parity(i);
+        bool kept = false;
+        for (std::size_t i : copies) {
+          if (net != 0 && !kept && parity(i) == (net > 0 ? 1 : -1)) {
+            kept = true;
+            continue;
+          }
+          keep[i] = 0;
+        }
+        const std::size_t removed = copies.size() - (net != 0 ? 1 : 0);
+        const std::size_t cancelled = copies.size() - std::size_t(std::abs(net));
+        r.cancelled_faces += cancelled;
+        r.duplicate_faces_dropped += removed - cancelled;
+      }
+    }
+    std::size_t w = 0;
+    for (std::size_t i = 0; i < tris.size(); ++i)
+      if (keep[i]) {
+        tris[w] = tris[i];
+        source[w++] = source[i];
+      }
+    tris.resize(w);
+    source.resize(w);
+  }
+
+  // Compact the points to those faces use.
+  std::vector<P3> pts;
+  std::vector<std::vector<std::size_t>> polys;
+  {
+    std::vector<std::size_t> map(input.points.size(), std::size_t(-1));
+    for (Tri& t : tris) {
+      std::vector<std::size_t> p(3);
+      for (int k = 0; k < 3; ++k) {
+        if (map[t[k]] == std::size_t(-1)) {
+          map[t[k]] = pts.size();
+          const Point3d& q = input.points[t[k]];
+          pts.emplace_back(q[0], q[1], q[2]);
+        }
+        p[k] = map[t[k]];
+        t[k] = Index(p[k]);
+      }
+      polys.push_back(std::move(p));
+    }
+  }
+
+  // Orientation. orient_polygon_soup makes each component consistent (and
+  // duplicates non-manifold points); it may turn a component the input had
+  // consistent, so each component is then turned back to agree with the
+  // input when all its faces did, else to enclose positive volume (closed)
+  // or to agree with most input faces (open).
+  if (o.orient && !polys.empty()) {
+    const std::size_t points_before = pts.size();
+    PMP::orient_polygon_soup(pts, polys);
+    r.split_vertices = pts.size() - points_before;
+    std::unordered_map<std::uint64_t, std::vector<std::size_t>> uses;
+    for (std::size_t f = 0; f < polys.size(); ++f)
+      for (int k = 0; k < 3; ++k) uses[edge_key(Index(polys[f][k]), Index(polys[f][(k + 1) % 3]))].push_back(f);
+    UnionFind uf(polys.size());
+    std::vector<char> open_component_face(polys.size(), 0);
+    for (const auto& [e, u] : uses) {
+      if (u.size() == 2) uf.unite(u[0], u[1]);
+      if (u.size() == 1) open_component_face[u[0]] = 1;
+    }
+    std::unordered_map<std::size_t, std::vector<std::size_t>> components;
+    for (std::size_t f = 0; f < polys.size(); ++f) components[uf.find(f)].push_back(f);
+    for (auto& [root, faces] : components) {
+      std::size_t agree = 0;
+      bool open = false;
+      for (std::size_t f : faces) {
+        agree += same_cycle(pts, polys[f], tris[f]);  // tris: the compacted input triangles
+        open = open || open_component_face[f];
+      }
+      bool flip;
+      if (agree == faces.size() || agree == 0) flip = agree == 0;
+      else if (!open) flip = volume_sign(pts, polys, faces) < 0;
+      else flip = 2 * agree < faces.size();
+      if (flip)
+        for (std::size_t f : faces) std::reverse(polys[f].begin(), polys[f].end());
+      for (std::size_t f : faces) r.reoriented_faces += !same_cycle(pts, polys[f], tris[f]);
+    }
+  }
+
+  // Stitch and fill, on a halfedge mesh.
+  SMesh mesh;
+  if (!polys.empty() && PMP::is_polygon_soup_a_polygon_mesh(polys)) {
+    PMP::polygon_soup_to_polygon_mesh(pts, polys, mesh);
+    r.stitched_edges = PMP::stitch_borders(mesh);
+    if (o.fill_holes) {
+      std::vector<SMesh::Halfedge_index> loops;
+      std::vector<char> seen(mesh.number_of_halfedges() + mesh.number_of_removed_halfedges(), 0);  // stitching leaves removed slots
+      for (SMesh::Halfedge_index h : mesh.halfedges()) {
+        if (!mesh.is_border(h) || seen[h.idx()]) continue;
+        std::size_t n = 0;
+        for (SMesh::Halfedge_index g : CGAL::halfedges_around_face(h, mesh)) {
+          seen[g.idx()] = 1;
+          ++n;
+        }
+        ++r.holes;
+        if (o.max_hole_edges && n > o.max_hole_edges) {
+          ++r.holes_left;
+          continue;
+        }
+        loops.push_back(h);
+      }
+      for (SMesh::Halfedge_index h : loops) {
+        // Large loops skip the cubic fallback (O(n^3)); a loop it cannot
+        // fill is left open and counted.
+        const std::size_t n = CGAL::halfedges_around_face(h, mesh).size();
+        std::vector<SMesh::Face_index> added;
+        PMP::triangulate_hole(mesh, h, std::back_inserter(added),
+                              CGAL::parameters::use_delaunay_triangulation(true).do_not_use_cubic_algorithm(n > 100));
+        if (added.empty()) {
+          ++r.holes_left;
+        } else {
+          ++r.holes_filled;
+          r.hole_faces += added.size();
+        }
+      }
+    }
+  } else if (!polys.empty()) {
+    // Not a polygon mesh (orientation off, non-manifold): the triangles as they are.
+    for (const P3& p : pts) result.soup.points.push_back({p.x(), p.y(), p.z()});
+    for (std::size_t f = 0; f < polys.size(); ++f) {
+      result.soup.add_triangle(Index(polys[f][0]), Index(polys[f][1]), Index(polys[f][2]));
+      result.source.push_back(source[f]);
+    }
+  }
+
+  // Export: faces in mesh order (the soup's polygons first, then fills).
+  Soup& out = result.soup;
+  if (out.face_count() == 0) {
+  std::vector<Index> vmap(mesh.number_of_vertices() + mesh.number_of_removed_vertices(), Index(-1));
+  for (SMesh::Vertex_index v : mesh.vertices()) {
+    vmap[v.idx()] = Index(out.points.size());
+    const P3& p = mesh.point(v);
+    out.points.push_back({p.x(), p.y(), p.z()});
+  }
+  for (SMesh::Face_index f : mesh.faces()) {
+    std::array<Index, 3> t{};
+    int k = 0;
+    for (SMesh::Vertex_index v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) {
+      if (k < 3) t[k] = vmap[v.idx()];
+      ++k;
+    }
+    if (k != 3) continue;
+    out.add_triangle(t[0], t[1], t[2]);
+    result.source.push_back(f.idx() < source.size() ? source[f.idx()] : -1);
+  }
+  }
+  if (!input.face_group.empty()) {
+    out.face_group.reserve(out.face_count());
+    for (std::int64_t s : result.source) out.face_group.push_back(s >= 0 ? input.face_group[std::size_t(s)] : -1);
+    out.group_names = input.group_names;
+  }
+  r.faces_out = out.face_count();
+  return result;
+}
+
+}  // namespace polyheal

@@ -1,0 +1,54 @@
+// polyheal — soup-level cleanup: the combinatorial defects of a triangle
+// soup, fixed without moving a coordinate (except the optional near weld).
+//
+// The first stage of `polyheal repair` (issue 7): weld identical (and, on
+// request, near-identical) vertices; drop faces that repeat a vertex index
+// and duplicate faces (a pair of opposite copies cancels, as it does in the
+// generalised winding number; copies of one orientation keep one); orient
+// each component consistently (CGAL's orient_polygon_soup, which also splits
+// non-manifold vertices and edges); stitch matching borders; fill holes
+// (CGAL's triangulate_hole: no new vertex). Faces keep their input corners
+// bit for bit; hole fills are new faces on existing vertices.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "polyheal/mesh/soup.h"
+
+namespace polyheal {
+
+struct CleanSoupOptions {
+  double weld = 0;                // model units: also merge vertices closer than this (0: identical only)
+  bool orient = true;             // orient components consistently
+  bool fill_holes = true;         // triangulate every boundary loop
+  std::size_t max_hole_edges = 0; // leave loops with more edges open (0: no limit)
+};
+
+struct CleanSoupReport {
+  std::size_t faces_in = 0, polygons_fanned = 0;
+  std::size_t identical_vertices_welded = 0, near_vertices_welded = 0;
+  double max_weld_move = 0;                  // model units: largest move of a near-welded vertex
+  std::size_t repeated_index_faces = 0;      // dropped
+  std::size_t duplicate_faces_dropped = 0;   // same-orientation copies beyond the first
+  std::size_t cancelled_faces = 0;           // opposite copies removed in pairs
+  std::size_t reoriented_faces = 0;
+  std::size_t split_vertices = 0;            // copies orient_polygon_soup made (non-manifold points)
+  std::size_t stitched_edges = 0;
+  std::size_t holes = 0, holes_filled = 0, hole_faces = 0;
+  std::size_t holes_left = 0;                // over max_hole_edges, or that triangulate_hole refused
+  std::size_t faces_out = 0;
+};
+
+struct CleanSoupResult {
+  Soup soup;                         // triangles; points are input points (or near-weld representatives)
+  std::vector<std::int64_t> source;  // per output face: the input face it came from, -1 for hole fills
+  CleanSoupReport report;
+};
+
+/// See the file comment. Never throws on a valid soup; an empty input gives
+/// an empty result.
+CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& options = {});
+
+}  // namespace polyheal

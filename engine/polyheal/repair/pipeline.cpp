@@ -1,0 +1,390 @@
+// polyheal — the automatic repair pipeline (see pipeline.h).
+#include "polyheal/repair/pipeline.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <unordered_map>
+
+#include "polyheal/mesh/errors.h"
+#include "polyheal/mesh/weld.h"
+#include "polyheal/repair/clean_soup.h"
+#include "polyheal/repair/degenerate.h"
+#include "polyheal/repair/deintersect.h"
+#include "polyheal/repair/detail/distance.h"
+#include "polyheal/repair/rebuild.h"
+#include "polyheal/repair/regularize.h"
+
+namespace polyheal {
+namespace {
+
+constexpr RepairStep kSteps[] = {kStepClean, kStepDegenerate, kStepDeintersect, kStepRegularize, kStepRebuild};
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+double diagonal_of(const Report& r) {
+  double s = 0;
+  for (int k = 0; k < 3; ++k) s += (r.bbox_max[k] - r.bbox_min[k]) * (r.bbox_max[k] - r.bbox_min[k]);
+  return std::sqrt(s);
+}
+
+/// The surface the pipeline carries from stage to stage, with its exact
+/// inspection.
+struct State {
+  Soup soup;
+  Report report;
+  std::size_t defects = 0;
+};
+
+class Pipeline {
+ public:
+  Pipeline(const Soup& input, const RepairOptions& o) : input_(input), o_(o) {}
+
+  RepairResult run() {
+    const auto t0 = std::chrono::steady_clock::now();
+    RepairReport& r = result_.report;
+    cur_ = inspected(input_);
+    r.faces_in = input_.face_count();
+    r.defects_in = cur_.defects;
+    r.diagonal = diagonal_of(cur_.report);
+    if (done()) {
+      r.clean_in = true;
+      result_.soup = input_;
+      r.seconds = seconds_since(t0);
+      return std::move(result_);
+    }
+    // The outline: each stage runs when the inspection says it is needed.
+    if (wanted(kStepClean) && needs_clean()) clean();
+    if (wanted(kStepDegenerate) && !done() && !cur_.report.degenerate_faces.empty()) degenerate();
+    if (wanted(kStepDeintersect) && !done() && !cur_.report.self_intersections.empty()) deintersect();
+    if (wanted(kStepRegularize) && !done() && cur_.report.closed) regularize();
+    if (wanted(kStepRebuild) && !done()) rebuild();
+    result_.soup = std::move(cur_.soup);
+    r.seconds = seconds_since(t0);
+    return std::move(result_);
+  }
+
+ private:
+  bool wanted(RepairStep s) const { return (o_.steps & s) != 0; }
+  bool done() const { return certified(cur_.report, o_.for_tetgen); }
+
+  State inspected(Soup soup) const {
+    State s;
+    s.report = inspect(soup);
+    s.defects = defect_count(s.report, o_.for_tetgen);
+    s.soup = std::move(soup);
+    return s;
+  }
+
+  bool needs_clean() const {
+    const Report& r = cur_.report;
+    return !r.closed || !r.manifold || !r.oriented || !r.duplicate_faces.empty() || r.non_triangle_faces > 0 ||
+           o_.weld > 0 || o_.weld_ratio > 0;
+  }
+
+  /// Runs one stage: `run()` returns the candidate surface (or throws
+  /// UnsupportedInput: the stage refuses this surface). The candidate
+  /// replaces the current surface when it is certified or has fewer
+  /// defects.
+  template <class Run>
+  StageReport& stage(const char* name, Run run) {
+    if (o_.observer) o_.observer->stage(name);
+    StageReport s;
+    s.name = name;
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      State next = inspected(run(s));
+      s.faces_out = next.soup.face_count();
+      s.defects_after = next.defects;
+      const bool better = certified(next.report, o_.for_tetgen) || next.defects < cur_.defects;
+      if (better) {
+        s.accepted = true;
+        s.hausdorff = detail::hausdorff_distance(input_, next.soup, 1e-4 * result_.report.diagonal);
+        cur_ = std::move(next);
+      } else {
+        s.outcome += (s.outcome.empty() ? "" : "; ") + std::string("not kept: ") + std::to_string(next.defects) +
+                     " defects after, " + std::to_string(cur_.defects) + " before";
+      }
+    } catch (const UnsupportedInput& e) {
+      s.outcome = std::string("refused: ") + e.what();
+    }
+    s.seconds = seconds_since(t0);
+    result_.report.stages.push_back(std::move(s));
+    return result_.report.stages.back();
+  }
+
+  void clean() {
+    const StageReport& s = clean_with(o_.fill_holes);
+    // Hole fills can cross the rest of the surface (overlapping patches
+    // around a gap): then the cleanup alone may still help.
+    if (!s.accepted && o_.fill_holes) clean_with(false);
+  }
+
+  const StageReport& clean_with(bool fill) {
+    return stage(fill ? "clean" : "clean (no fill)", [&](StageReport& s) {
+      CleanSoupOptions co;
+      co.weld = o_.weld > 0 ? o_.weld : o_.weld_ratio * result_.report.diagonal;
+      co.fill_holes = fill;
+      co.max_hole_edges = o_.max_hole_edges;
+      CleanSoupResult c = clean_soup(cur_.soup, co);
+      const CleanSoupReport& r = c.report;
+      s.counts = {{"welded_identical", double(r.identical_vertices_welded)},
+                  {"welded_near", double(r.near_vertices_welded)},
+                  {"repeated_index_faces", double(r.repeated_index_faces)},
+                  {"duplicate_faces_dropped", double(r.duplicate_faces_dropped)},
+                  {"cancelled_faces", double(r.cancelled_faces)},
+                  {"reoriented_faces", double(r.reoriented_faces)},
+                  {"split_vertices", double(r.split_vertices)},
+                  {"stitched_edges", double(r.stitched_edges)},
+                  {"holes", double(r.holes)},
+                  {"holes_filled", double(r.holes_filled)},
+                  {"hole_faces", double(r.hole_faces)},
+                  {"holes_left", double(r.holes_left)}};
+      if (r.near_vertices_welded) s.max_displacement = r.max_weld_move;
+      std::ostringstream line;
+      line << r.repeated_index_faces << " repeated-index and " << r.duplicate_faces_dropped + r.cancelled_faces
+           << " duplicate faces dropped, " << r.reoriented_faces << " reoriented, " << r.stitched_edges
+           << " edges stitched, " << r.holes_filled << " of " << r.holes << " holes filled";
+      if (r.near_vertices_welded) line << ", " << r.near_vertices_welded << " near vertices welded";
+      s.outcome = line.str();
+      return std::move(c.soup);
+    });
+  }
+
+  void degenerate() {
+    stage("degenerate", [&](StageReport& s) {
+      DegenerateOptions d;
+      d.cap_angle = 180;    // zero-area faces only: caps and needles are shapes, not defects
+      d.needle_angle = 0;
+      d.certify = false;
+      d.observer = o_.observer;
+      DegenerateResult res = remove_degenerate_faces(cur_.soup, d);
+      const DegenerateReport& r = res.report;
+      s.counts = {{"zero_area_before", double(r.before.zero_area)},
+                  {"zero_area_after", double(r.after.zero_area)},
+                  {"slices", double(r.cap_slices + r.needle_slices)},
+                  {"collapses", double(r.collapses)},
+                  {"flips", double(r.flips)}};
+      s.outcome = std::to_string(r.before.zero_area) + " zero-area faces, " + std::to_string(r.after.zero_area) +
+                  " left; " + std::to_string(r.collapses) + " collapses, " + std::to_string(r.flips) + " flips";
+      return std::move(res.soup);
+    });
+  }
+
+  void deintersect() {
+    stage("deintersect", [&](StageReport& s) {
+      DeintersectOptions d;
+      d.certify = false;
+      d.observer = o_.observer;
+      DeintersectResult res = remove_self_intersections(cur_.soup, d);
+      const DeintersectReport& r = res.report;
+      s.max_displacement = r.max_displacement;
+      s.counts = {{"intersecting_faces_in", double(r.intersecting_faces_in)},
+                  {"intersecting_faces_left", double(r.intersecting_faces_exact)},
+                  {"swaps", double(r.swaps)},
+                  {"hammers", double(r.hammers)},
+                  {"lifts", double(r.lifts)},
+                  {"moved_vertices", double(r.moved_vertices)}};
+      s.outcome = std::to_string(r.intersecting_faces_in) + " intersecting faces, " +
+                  std::to_string(r.intersecting_faces_exact) + " left; " + std::to_string(r.swaps) + " swaps, " +
+                  std::to_string(r.hammers) + " hammers, " + std::to_string(r.lifts) + " lifts";
+      return std::move(res.soup);
+    });
+  }
+
+  void regularize() {
+    stage("regularize", [&](StageReport& s) {
+      RegularizeOptions ro;
+      ro.certify = false;
+      ro.observer = o_.observer;
+      RegularizeResult res = polyheal::regularize(cur_.soup, ro);
+      const RegularizeReport& r = res.report;
+      s.counts = {{"intersecting_pairs_in", double(r.intersecting_pairs_in)},
+                  {"triangles_split", double(r.triangles_split)},
+                  {"invalid", double(r.invalid)},
+                  {"components_removed", double(r.components_removed)}};
+      s.outcome = std::to_string(r.intersecting_pairs_in) + " intersecting pairs; " +
+                  std::to_string(r.triangles_split) + " triangles split, " + std::to_string(r.invalid) +
+                  " inside the union removed, " + std::to_string(r.components_removed) + " components enclosed";
+      return std::move(res.soup);
+    });
+  }
+
+  void rebuild() {
+    // From the input, not the current surface: earlier stages may have
+    // closed a sheet by filling its boundary (a flat double layer), which
+    // the overlay grid would take for a volume.
+    stage("rebuild", [&](StageReport& s) {
+      RebuildOptions ro;
+      ro.certify = false;
+      ro.keep_clean = false;
+      ro.observer = o_.observer;
+      RebuildResult res = polyheal::rebuild(input_, ro);
+      const RebuildReport& r = res.report;
+      s.counts = {{"cell", r.cell},
+                  {"boundary_cells", double(r.boundary_cells)},
+                  {"sheet_facets", double(r.sheet_facets)},
+                  {"thin_facets", double(r.thin_facets)},
+                  {"extracted_faces", double(r.extracted_faces)}};
+      std::ostringstream line;
+      line << "overlay grid of cell " << r.cell << " (" << r.cell_rule << "), " << r.faces_out << " faces";
+      if (r.sheet_facets + r.thin_facets)
+        line << "; " << r.sheet_facets + r.thin_facets << " sheet or thin facets wrapped in a shell";
+      s.outcome = line.str();
+      return std::move(res.soup);
+    });
+  }
+
+  const Soup& input_;
+  const RepairOptions& o_;
+  State cur_;
+  RepairResult result_;
+};
+
+double triangle_area(const Point3d& a, const Point3d& b, const Point3d& c) {
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  return 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
+double face_area(const Soup& s, std::size_t f) {
+  const FaceView v = s.face(f);
+  double a = 0;
+  for (std::size_t k = 1; k + 1 < v.size(); ++k) a += triangle_area(s.points[v[0]], s.points[v[k]], s.points[v[k + 1]]);
+  return a;
+}
+
+/// Key of a triangle by its corner positions, independent of rotation and
+/// orientation (provenance: "the same face").
+struct CornerKey {
+  std::array<Point3d, 3> p;
+  bool operator==(const CornerKey& o) const { return p == o.p; }
+};
+struct CornerKeyHash {
+  std::size_t operator()(const CornerKey& k) const {
+    std::size_t h = 0;
+    for (const Point3d& q : k.p)
+      for (double x : q) h = h * 1000003u ^ std::hash<double>()(x);
+    return h;
+  }
+};
+CornerKey corner_key(const Soup& s, std::size_t f) {
+  const FaceView v = s.face(f);
+  CornerKey k{{s.points[v[0]], s.points[v[1]], s.points[v[2]]}};
+  std::sort(k.p.begin(), k.p.end());
+  return k;
+}
+
+}  // namespace
+
+const char* step_name(RepairStep step) {
+  switch (step) {
+    case kStepClean: return "clean";
+    case kStepDegenerate: return "degenerate";
+    case kStepDeintersect: return "deintersect";
+    case kStepRegularize: return "regularize";
+    case kStepRebuild: return "rebuild";
+    default: return "?";
+  }
+}
+
+unsigned parse_steps(const std::string& list) {
+  unsigned mask = 0;
+  std::istringstream in(list);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (item.empty()) continue;
+    if (item == "all") {
+      mask |= kAllSteps;
+      continue;
+    }
+    bool found = false;
+    for (RepairStep s : kSteps)
+      if (item == step_name(s)) {
+        mask |= s;
+        found = true;
+      }
+    if (!found)
+      throw std::invalid_argument("unknown step '" + item +
+                                  "' (expected clean, degenerate, deintersect, regularize, rebuild or all)");
+  }
+  return mask;
+}
+
+std::size_t defect_count(const Report& r, bool for_tetgen) {
+  std::size_t n = r.boundary_edges.size() + r.nonmanifold_edges.size() + r.nonmanifold_vertices.size() +
+                  r.misoriented_edges.size() + r.duplicate_faces.size() + r.degenerate_faces.size() +
+                  r.self_intersections.size() + (r.faces == 0 ? 1 : 0);
+  if (for_tetgen) n += r.sharp_folds.size() + r.nearly_degenerate_faces.size();
+  return n;
+}
+
+bool certified(const Report& r, bool for_tetgen) { return for_tetgen ? r.tetgen_ready() : r.certified_clean(); }
+
+RepairResult repair(const Soup& input, const RepairOptions& options) { return Pipeline(input, options).run(); }
+
+Assessment assess(const Soup& input, const Soup& written, double max_deviation, bool for_tetgen) {
+  Assessment a;
+  a.out = inspect(written);
+  a.certified = certified(a.out, for_tetgen);
+  const Report in = inspect(input);  // topology only would do; the full pass keeps one code path
+  a.components_in = in.components;
+  a.components_out = a.out.components;
+  a.diagonal = diagonal_of(in);
+  a.max_deviation = max_deviation;
+  a.error_bound = 1e-4 * a.diagonal;
+  if (written.face_count() && input.face_count()) {
+    const std::array<double, 2> d = detail::one_sided_distances(input, written, a.error_bound);
+    a.input_to_output = d[0];
+    a.output_to_input = d[1];
+    a.hausdorff = std::max(d[0], d[1]);
+    const Loss loss = measure_loss(input, written, max_deviation);
+    a.dropped_components = loss.lost_components + loss.absorbed_components;
+    a.absorbed_components = loss.absorbed_components;
+    a.absorbed_faces = loss.absorbed_faces;
+    // The surface moved: how far the output is from the input, and the
+    // input (but for what the output encloses) from the output.
+    a.deviation = a.hausdorff;
+    if (loss.absorbed_faces) {
+      Soup visible;
+      visible.points = input.points;
+      for (std::size_t f = 0; f < input.face_count(); ++f)
+        if (!loss.absorbed[f]) {
+          const FaceView v = input.face(f);
+          visible.add_face(v.begin(), v.end());
+        } else {
+          a.area_absorbed += face_area(input, f);
+        }
+      const double visible_to_output =
+          visible.face_count() ? detail::one_sided_distances(visible, written, a.error_bound)[0] : 0.0;
+      a.deviation = std::max(a.output_to_input, visible_to_output);
+    }
+  } else if (input.face_count()) {
+    a.dropped_components = a.components_in;
+  }
+  a.within_deviation = a.deviation >= 0 ? a.deviation <= max_deviation : written.face_count() == input.face_count();
+  // Provenance: an output face whose corners are exactly an input face's.
+  std::unordered_map<CornerKey, std::int64_t, CornerKeyHash> by_corners;
+  for (std::size_t f = 0; f < input.face_count(); ++f) {
+    a.area_in += face_area(input, f);
+    if (input.face(f).size() == 3) by_corners.emplace(corner_key(input, f), std::int64_t(f));
+  }
+  a.provenance.assign(written.face_count(), -1);
+  for (std::size_t f = 0; f < written.face_count(); ++f) {
+    const double area = face_area(written, f);
+    a.area_out += area;
+    if (written.face(f).size() != 3) continue;
+    auto it = by_corners.find(corner_key(written, f));
+    if (it == by_corners.end()) continue;
+    a.provenance[f] = it->second;
+    ++a.faces_kept;
+    a.area_kept += area;
+  }
+  return a;
+}
+
+}  // namespace polyheal

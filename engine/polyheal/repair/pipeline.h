@@ -1,0 +1,119 @@
+// polyheal — the automatic repair pipeline (`polyheal repair`, issue 7).
+//
+// An outline of stages, each run only when the exact inspection of the
+// current surface says it is needed, and kept only when it helps:
+//   1. clean       soup-level defects (clean_soup.h): weld, drop repeated-index
+//                  and duplicate faces, orient, split non-manifold points,
+//                  stitch borders, fill holes. Moves no coordinate (unless
+//                  a near weld is asked for).
+//   2. degenerate  exactly zero-area faces (Botsch & Kobbelt, degenerate.h),
+//                  with cap/needle thresholds at their limits: only faces
+//                  that are defects are touched, not mere bad shapes.
+//   3. deintersect self-intersections by local moves (Yamakawa & Shimada,
+//                  deintersect.h): small displacements, faces elsewhere keep
+//                  their coordinates.
+//   4. regularize  when local repair cannot finish on a closed surface: the
+//                  union's boundary (Jung, Shin & Choi, regularize.h); every
+//                  output triangle lies on the input surface.
+//   5. rebuild     the last resort for anything else (Hu et al., rebuild.h):
+//                  an overlay-grid volume around the input, within a cell.
+// The caller writes the result and assesses the written file (assess()):
+// certification, Hausdorff distance, dropped components, provenance.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "polyheal/inspect/report.h"
+#include "polyheal/mesh/soup.h"
+#include "polyheal/observer.h"
+
+namespace polyheal {
+
+enum RepairStep : unsigned {
+  kStepClean = 1u << 0,
+  kStepDegenerate = 1u << 1,
+  kStepDeintersect = 1u << 2,
+  kStepRegularize = 1u << 3,
+  kStepRebuild = 1u << 4,
+  kAllSteps = 0x1Fu,
+};
+
+/// "clean", "degenerate", ...; parse_steps("clean,deintersect") -> mask
+/// (throws std::invalid_argument naming an unknown step).
+const char* step_name(RepairStep step);
+unsigned parse_steps(const std::string& list);
+
+struct RepairOptions {
+  unsigned steps = kAllSteps;
+  double weld = 0;                  // model units: also weld vertices closer than this (0: identical only)
+  double weld_ratio = 0;            // the same as a fraction of the bbox diagonal (used when weld is 0)
+  bool fill_holes = true;
+  std::size_t max_hole_edges = 0;   // leave longer boundary loops open (0: fill all)
+  bool for_tetgen = false;          // also remove what trips TetGen's tolerances (Report::tetgen_ready)
+  Observer* observer = nullptr;
+};
+
+struct StageReport {
+  std::string name;
+  bool accepted = false;           // its result replaced the current surface
+  std::string outcome;             // one line: what it did, or why it was refused / not kept
+  std::size_t faces_out = 0;
+  std::size_t defects_after = 0;   // defect_count() of its result
+  double hausdorff = -1;           // its result to the input (symmetric; -1: not measured)
+  double max_displacement = -1;    // largest vertex move, where the stage moves vertices (-1: n/a)
+  double seconds = 0;
+  std::vector<std::pair<std::string, double>> counts;  // stage-specific numbers, for the JSON report
+};
+
+struct RepairReport {
+  std::size_t faces_in = 0, defects_in = 0;
+  bool clean_in = false;           // the input was certified already: written unchanged
+  double diagonal = 0;
+  std::vector<StageReport> stages;
+  double seconds = 0;
+};
+
+struct RepairResult {
+  Soup soup;
+  RepairReport report;
+};
+
+/// Defects that keep a surface from certification: boundary, non-manifold
+/// and misoriented edges, non-manifold vertices, duplicate and degenerate
+/// faces, self-intersecting pairs (and, for TetGen, its tolerance issues).
+std::size_t defect_count(const Report& r, bool for_tetgen);
+bool certified(const Report& r, bool for_tetgen);
+
+RepairResult repair(const Soup& input, const RepairOptions& options = {});
+
+/// What a repair did to the surface, measured on the file as written.
+struct Assessment {
+  Report out;                              // the exact inspection of the written file
+  bool certified = false;                  // out.certified_clean() (and tetgen_ready with for_tetgen)
+  double hausdorff = -1, input_to_output = -1, output_to_input = -1, error_bound = 0;
+  // How far the surface moved: max(output -> input, input -> output over the
+  // input faces not absorbed). Input faces farther than max_deviation from
+  // the output and inside its volume (the inside of interpenetrating parts,
+  // inner walls, enclosed components) are absorbed: removed, not moved;
+  // their area is reported and whole components of them count as dropped.
+  double deviation = -1;
+  std::size_t absorbed_faces = 0;
+  double area_absorbed = 0;
+  double diagonal = 0;
+  std::size_t components_in = 0, components_out = 0;
+  std::size_t dropped_components = 0;      // input components with no output face within max_deviation
+  std::size_t absorbed_components = 0;     // ... of them, inside the output's volume (inner parts)
+  std::size_t faces_kept = 0;              // output faces that are input faces, corner for corner
+  std::vector<std::int64_t> provenance;    // per output face: the input face with its exact corners, or -1
+  double area_in = 0, area_out = 0, area_kept = 0;  // area_kept: of the kept faces
+  double max_deviation = 0;
+  bool within_deviation = true;            // deviation <= max_deviation
+};
+
+Assessment assess(const Soup& input, const Soup& written, double max_deviation, bool for_tetgen);
+
+}  // namespace polyheal

@@ -1,0 +1,148 @@
+// polyheal clean_soup: the soup-level stage of `repair`. Each case breaks a
+// closed cube in one combinatorial way and requires a certified clean cube
+// back whose faces are the input's, corner for corner (no coordinate moves).
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <set>
+
+#include "polyheal/inspect/report.h"
+#include "polyheal/repair/clean_soup.h"
+#include "support/builders.h"
+
+using namespace polyheal;
+
+namespace {
+
+/// The unit cube as 12 triangles, outward, every face with its own three
+/// vertices (an STL-like soup: welding is needed before anything else).
+Soup stl_cube(double shift = 0) {
+  const Point3d c[8] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  const int t[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                        {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+  Soup s;
+  for (const auto& f : t) {
+    const Index base = Index(s.points.size());
+    for (int k = 0; k < 3; ++k) s.points.push_back({c[f[k]][0] + shift, c[f[k]][1] + shift, c[f[k]][2] + shift});
+    s.add_triangle(base, base + 1, base + 2);
+  }
+  return s;
+}
+
+/// The corner positions of every face, rotation-normalised, with orientation.
+std::multiset<std::array<Point3d, 3>> oriented_faces(const Soup& s) {
+  std::multiset<std::array<Point3d, 3>> out;
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    std::array<Point3d, 3> t{s.points[s.face(f)[0]], s.points[s.face(f)[1]], s.points[s.face(f)[2]]};
+    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+    out.insert(t);
+  }
+  return out;
+}
+
+void check_clean_cube(const CleanSoupResult& r, const Soup& reference) {
+  const Report rep = inspect(r.soup);
+  CHECK(rep.certified_clean());
+  CHECK(rep.signed_volume > 0);
+  // Every face kept from the input is an input face in the input's orientation.
+  const auto ref = oriented_faces(reference);
+  for (std::size_t f = 0; f < r.soup.face_count(); ++f) {
+    if (r.source[f] < 0) continue;
+    std::array<Point3d, 3> t{r.soup.points[r.soup.face(f)[0]], r.soup.points[r.soup.face(f)[1]],
+                             r.soup.points[r.soup.face(f)[2]]};
+    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+    CHECK(ref.count(t) == 1);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("clean_soup: an STL-like cube is welded into a clean solid, faces unchanged", "[clean_soup]") {
+  const Soup cube = stl_cube();
+  CHECK(cube.points.size() == 36);
+  const CleanSoupResult r = clean_soup(cube);
+  CHECK(r.report.identical_vertices_welded == 36 - 8);
+  CHECK(r.report.reoriented_faces == 0);
+  CHECK(r.soup.face_count() == 12);
+  check_clean_cube(r, cube);
+}
+
+TEST_CASE("clean_soup: a flipped face is turned back, the component's majority and volume decide", "[clean_soup]") {
+  Soup cube = stl_cube();
+  std::swap(cube.indices[3 * 5 + 1], cube.indices[3 * 5 + 2]);  // face 5 reversed
+  CHECK_FALSE(inspect(cube).oriented);
+  const CleanSoupResult r = clean_soup(cube);
+  CHECK(r.report.reoriented_faces == 1);
+  check_clean_cube(r, stl_cube());
+}
+
+TEST_CASE("clean_soup: a consistently inward shell keeps its orientation (a cavity is not flipped)", "[clean_soup]") {
+  Soup inner = test::tetrahedron(0.25, 0.25, 0.25);
+  for (std::size_t f = 0; f < inner.face_count(); ++f) std::swap(inner.indices[3 * f + 1], inner.indices[3 * f + 2]);
+  const CleanSoupResult r = clean_soup(inner);
+  CHECK(r.report.reoriented_faces == 0);
+  CHECK(inspect(r.soup).signed_volume < 0);
+}
+
+TEST_CASE("clean_soup: duplicates — same-orientation copies keep one, opposite copies cancel", "[clean_soup]") {
+  Soup cube = stl_cube();
+  const Soup reference = cube;
+  // Face 0 twice more in its orientation; face 2 once reversed (a pair that
+  // cancels: then the hole it leaves is filled again).
+  for (int rep = 0; rep < 2; ++rep) cube.add_triangle(cube.indices[0], cube.indices[1], cube.indices[2]);
+  cube.add_triangle(cube.indices[6], cube.indices[8], cube.indices[7]);
+  // A face repeating an index.
+  cube.add_triangle(0, 0, 1);
+  const CleanSoupResult r = clean_soup(cube);
+  CHECK(r.report.duplicate_faces_dropped == 2);
+  CHECK(r.report.cancelled_faces == 2);
+  CHECK(r.report.repeated_index_faces == 1);
+  CHECK(r.report.holes_filled == 1);
+  check_clean_cube(r, reference);
+}
+
+TEST_CASE("clean_soup: a missing face is filled from existing vertices, reported as new", "[clean_soup]") {
+  Soup cube = stl_cube();
+  Soup open;
+  open.points = cube.points;
+  for (std::size_t f = 0; f < 12; ++f)
+    if (f != 3) open.add_triangle(cube.face(f)[0], cube.face(f)[1], cube.face(f)[2]);
+  CHECK_FALSE(inspect(open).closed);
+  const CleanSoupResult r = clean_soup(open);
+  CHECK(r.report.holes == 1);
+  CHECK(r.report.holes_filled == 1);
+  CHECK(r.report.hole_faces == 1);
+  CHECK(std::count(r.source.begin(), r.source.end(), -1) == 1);
+  check_clean_cube(r, cube);
+
+  CleanSoupOptions no_fill;
+  no_fill.fill_holes = false;
+  const CleanSoupResult left = clean_soup(open, no_fill);
+  CHECK(left.report.holes_filled == 0);
+  CHECK_FALSE(inspect(left.soup).closed);
+}
+
+TEST_CASE("clean_soup: a near weld closes a crack the exact weld cannot, and says how far it moved", "[clean_soup]") {
+  Soup cube = stl_cube();
+  for (std::size_t f = 6; f < 12; ++f)  // half the faces' copies of each corner nudged by 1e-7
+    for (Index i : cube.face(f)) cube.points[i][0] += 1e-7;
+  CleanSoupOptions o;
+  o.fill_holes = false;
+  CHECK_FALSE(inspect(clean_soup(cube, o).soup).closed);
+  o.weld = 1e-6;
+  const CleanSoupResult r = clean_soup(cube, o);
+  CHECK(r.report.near_vertices_welded > 0);
+  CHECK(r.report.max_weld_move <= 2e-7);
+  CHECK(r.report.holes == 0);
+  CHECK(inspect(r.soup).certified_clean());
+}
+
+TEST_CASE("clean_soup: two cubes touching at a corner: the pinch point is split, coordinates unchanged", "[clean_soup]") {
+  const Soup a = stl_cube(), b = stl_cube(1.0);  // shifted by (1,1,1): they meet at one corner
+  Soup two = test::concat(a, b);
+  CHECK_FALSE(inspect(two).manifold);  // a pinch vertex at (1,1,1)
+  const CleanSoupResult r = clean_soup(two);
+  CHECK(r.report.split_vertices >= 1);
+  CHECK(r.soup.face_count() == 24);
+  CHECK(oriented_faces(r.soup) == oriented_faces(two));
+}
