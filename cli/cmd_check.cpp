@@ -9,12 +9,15 @@
 #include "polyheal/inspect/report.h"
 #include "polyheal/io/read.h"
 #include "progress.h"
+#include "certificate.h"
+#include "polyheal/mesh/errors.h"
+#include <fstream>
 
 namespace polyheal::cli {
 namespace {
 
 struct CheckArgs {
-  std::string file;
+  std::string file, certificate;
   bool json = false, list = false, tetgen_ready = false, sequential = false;
   InspectOptions inspect;
 };
@@ -144,6 +147,39 @@ void print_text(const CheckArgs& args, const Report& r, double total_s) {
               total_s);
 }
 
+/// `check FILE --certificate C`: the file's SHA-256 against the
+/// certificate's output hash, and each recorded check against the exact
+/// inspection now. Returns what differs (empty: it matches), printed unless --json.
+std::vector<std::string> confirm_certificate(const CheckArgs& args, const Report& r) {
+  std::ifstream in(args.certificate);
+  if (!in) throw InputError(args.certificate, "", "cannot open for reading");
+  nlohmann::json c;
+  try {
+    c = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(args.certificate, "byte " + std::to_string(e.byte), "not JSON");
+  }
+  if (!c.is_object() || c.value("schema", "") != "polyheal.certificate/1" || !c.contains("checks") ||
+      !c["checks"].is_object() || !c.contains("output") || !c["output"].contains("sha256"))
+    throw InputError(args.certificate, "", "not a polyheal.certificate/1 document");
+  std::vector<std::string> mismatches;
+  const std::string hash = sha256_file(args.file);
+  if (c["output"]["sha256"] != hash) mismatches.push_back("sha256 " + hash + ", certificate says " +
+                                                          c["output"]["sha256"].get<std::string>());
+  const nlohmann::json now = checks_json(r);
+  for (auto it = c["checks"].begin(); it != c["checks"].end(); ++it) {
+    if (!now.contains(it.key())) mismatches.push_back("unknown check '" + it.key() + "'");
+    else if (now[it.key()] != it.value())
+      mismatches.push_back(it.key() + " is " + now[it.key()].dump() + ", certificate says " + it.value().dump());
+  }
+  if (!args.json) {
+    std::printf("  certificate %s: %s\n", args.certificate.c_str(),
+                mismatches.empty() ? "MATCHES (hash and every check)" : "DOES NOT MATCH");
+    for (const std::string& m : mismatches) std::printf("    %s\n", m.c_str());
+  }
+  return mismatches;
+}
+
 }  // namespace
 
 void add_check(CLI::App& app, int& exit_code) {
@@ -174,6 +210,9 @@ void add_check(CLI::App& app, int& exit_code) {
                   "TetGen: adjacent faces folded below this angle are 'nearly self-intersecting' (degrees)")
       ->default_val(0.1)->check(CLI::Range(0.0, 90.0));
   cmd->add_flag("--sequential", args->sequential, "do not use threads");
+  cmd->add_option("--certificate", args->certificate,
+                  "confirm FILE matches this certificate (written by repair --certificate): its SHA-256 and "
+                  "every recorded check; exit 1 on any difference");
   cmd->callback([args, &exit_code] {
     const auto t0 = std::chrono::steady_clock::now();
     TtyProgress progress;
@@ -185,12 +224,18 @@ void add_check(CLI::App& app, int& exit_code) {
     const Report r = inspect(soup, args->inspect);
     const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     progress.finish();
-    if (args->json)
-      std::cout << to_json(*args, r, read_s, total_s).dump(2) << "\n";
-    else
-      print_text(*args, r, total_s);
+    bool matches = true;
+    nlohmann::json j;
+    if (args->json) j = to_json(*args, r, read_s, total_s);
+    else print_text(*args, r, total_s);
+    if (!args->certificate.empty()) {
+      const std::vector<std::string> mismatches = confirm_certificate(*args, r);
+      matches = mismatches.empty();
+      if (args->json) j["certificate"] = {{"path", args->certificate}, {"matches", matches}, {"mismatches", mismatches}};
+    }
+    if (args->json) std::cout << j.dump(2) << "\n";
     const bool ok = args->tetgen_ready ? r.tetgen_ready() : r.certified_clean();
-    exit_code = ok ? kClean : kDefects;
+    exit_code = ok && matches ? kClean : kDefects;
   });
 }
 

@@ -84,6 +84,8 @@ nlohmann::json to_json(const RepairArgs& args, const Outcome& o) {
             {"max_deviation", o.max_deviation},
             {"within", a.within_deviation},
             {"absorbed_faces", a.absorbed_faces},
+            {"fill_faces", a.fill_faces},
+            {"fill_distance", a.fill_distance},
             {"absorbed_area_fraction", a.area_in > 0 ? a.area_absorbed / a.area_in : 0.0}}},
           {"components",
            {{"input", a.components_in}, {"output", a.components_out}, {"dropped", a.dropped_components},
@@ -117,6 +119,9 @@ void print_text(const RepairArgs& args, const Outcome& o) {
               "output->input %.3g)\n",
               a.deviation, 100 * a.deviation / diag, o.max_deviation, a.hausdorff, a.input_to_output,
               a.output_to_input);
+  if (a.fill_faces)
+    std::printf("  filled: %zu new faces across holes, up to %.3g (%.3g%%) from the input\n",
+                a.fill_faces, a.fill_distance, 100 * a.fill_distance / diag);
   if (a.absorbed_faces)
     std::printf("  absorbed: %zu input faces (%.2g%% of the area) farther than %.3g from the output and inside it\n",
                 a.absorbed_faces, a.area_in > 0 ? 100 * a.area_absorbed / a.area_in : 0.0, o.max_deviation);
@@ -157,7 +162,7 @@ void run(RepairArgs& args, int& exit_code) {
       result.soup, args, progress, o.write_s,
       [&](const Soup& written) {
         progress.stage("assessing the written file");
-        o.a = assess(input, written, o.max_deviation, args.options.for_tetgen);
+        o.a = assess(input, written, o.max_deviation, args.options.for_tetgen, result.hole_fills);
         if (!o.a.certified) o.problems.push_back("not certified");
         if (!o.a.within_deviation) {
           std::ostringstream s;

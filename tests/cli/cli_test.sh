@@ -153,5 +153,46 @@ grep_out "choose a larger --cell" "$tmp/err" "rebuild says how to fix the grid s
 expect 2 "rebuild never writes over its input" -- "$bin" rebuild "$tmp/sheet.off" -o "$tmp/sheet.off" --overwrite
 expect 0 "rebuild help" -- "$bin" rebuild --help
 grep_out "winding" "$tmp/out" "rebuild help explains the classification"
+# polyheal repair, certificates, compare
+expect 0 "repair frees the coarse tube" -- "$bin" repair "$src/fixtures/tube_edge3.0.off" -o "$tmp/rp_tube.off" --certificate "$tmp/rp_tube.json" --provenance "$tmp/rp_tube.prov"
+grep_out "deintersect" "$tmp/out" "repair names the stage it ran"
+grep_out "CERTIFIED CLEAN" "$tmp/out" "repair verdict printed"
+expect 0 "repair output checks clean" -- "$bin" check "$tmp/rp_tube.off"
+expect 0 "the output matches its certificate" -- "$bin" check "$tmp/rp_tube.off" --certificate "$tmp/rp_tube.json"
+grep_out "MATCHES" "$tmp/out" "certificate match printed"
+[ "$(wc -l < "$tmp/rp_tube.prov")" -eq 220 ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: provenance has not one line per face"; }
+grep -q '^new$' "$tmp/rp_tube.prov" && grep -q '^[0-9]' "$tmp/rp_tube.prov" && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: provenance lacks kept or new faces"; }
+cp "$tmp/rp_tube.off" "$tmp/rp_tampered.off"; printf '# edited\n' >> "$tmp/rp_tampered.off"
+expect 1 "a changed file does not match the certificate" -- "$bin" check "$tmp/rp_tampered.off" --certificate "$tmp/rp_tube.json"
+grep_out "DOES NOT MATCH" "$tmp/out" "certificate mismatch printed"
+expect 1 "another file's certificate does not match" -- "$bin" check "$src/fixtures/tube_edge3.0.off" --certificate "$tmp/rp_tube.json"
+printf '{"schema": "x"}' > "$tmp/notcert.json"
+expect 2 "a JSON file that is not a certificate" -- "$bin" check "$tmp/rp_tube.off" --certificate "$tmp/notcert.json"
+printf '{"schema": ' > "$tmp/broken.json"
+expect 2 "a broken certificate" -- "$bin" check "$tmp/rp_tube.off" --certificate "$tmp/broken.json"
+grep_out "broken.json:byte" "$tmp/err" "broken certificate error names the byte"
+expect 0 "repair --json" -- "$bin" repair --json "$src/fixtures/torus.off" -o "$tmp/rp_torus.off"
+grep_out '"schema": "polyheal.repair/1"' "$tmp/out" "repair json schema tag"
+grep_out '"certified_clean": true' "$tmp/out" "repair json: clean input reported"
+cmp -s "$src/fixtures/torus.off" "$tmp/rp_torus.off" && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: clean input not written unchanged"; }
+expect 1 "repair exits 1 when the surface moves beyond --max-deviation" -- "$bin" repair "$src/fixtures/dirty_box.obj" -o "$tmp/rp_box.off" --max-deviation 0.01%
+grep_out "more than --max-deviation" "$tmp/out" "repair says the bound was exceeded"
+expect 0 "repaired dirty box still checks clean" -- "$bin" check "$tmp/rp_box.off"
+expect 1 "repair with --steps clean cannot free the tube" -- "$bin" repair "$src/fixtures/tube_edge3.0.off" -o "$tmp/rp_tube2.off" --steps clean
+expect 2 "repair rejects an unknown step" -- "$bin" repair "$src/fixtures/tube_edge3.0.off" -o "$tmp/rp_x.off" --steps clean,polish
+grep_out "unknown step 'polish'" "$tmp/err" "unknown step named"
+expect 2 "repair never writes over its input" -- "$bin" repair "$tmp/rp_tube.off" -o "$tmp/rp_tube.off" --overwrite
+expect 2 "repair malformed input" -- "$bin" repair "$tmp/bad.off" -o "$tmp/rp_bad.off"
+[ ! -e "$tmp/rp_bad.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: repair wrote output on error"; }
+expect 0 "repair help" -- "$bin" repair --help
+grep_out "regularize" "$tmp/out" "repair help lists the stages"
+expect 0 "compare: a certified repair within bounds" -- "$bin" compare "$src/fixtures/tube_edge3.0.off" "$tmp/rp_tube.off" --max-deviation 1%
+grep_out "Hausdorff" "$tmp/out" "compare prints the distance"
+expect 1 "compare: a defective B" -- "$bin" compare "$tmp/rp_tube.off" "$src/fixtures/tube_edge3.0.off"
+expect 1 "compare: beyond --max-deviation" -- "$bin" compare "$src/fixtures/tube_edge3.0.off" "$tmp/rp_tube.off" --max-deviation 0.0001%
+expect 0 "compare --json" -- "$bin" compare --json "$src/fixtures/torus.off" "$src/fixtures/torus.off"
+grep_out '"schema": "polyheal.compare/1"' "$tmp/out" "compare json schema tag"
+grep_out '"topology_changed": false' "$tmp/out" "compare json topology"
+expect 2 "compare a missing file" -- "$bin" compare "$src/fixtures/torus.off" "$tmp/none.off"
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]

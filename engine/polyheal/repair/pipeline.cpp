@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
@@ -38,6 +39,7 @@ struct State {
   Soup soup;
   Report report;
   std::size_t defects = 0;
+  double hausdorff = 0;  // to the input
 };
 
 class Pipeline {
@@ -60,8 +62,16 @@ class Pipeline {
     // The outline: each stage runs when the inspection says it is needed.
     if (wanted(kStepClean) && needs_clean()) clean();
     if (wanted(kStepDegenerate) && !done() && !cur_.report.degenerate_faces.empty()) degenerate();
-    if (wanted(kStepDeintersect) && !done() && !cur_.report.self_intersections.empty()) deintersect();
-    if (wanted(kStepRegularize) && !done() && cur_.report.closed) regularize();
+    // Self-intersections: local moves first; on a closed surface the union
+    // (regularization) of what they left, and of the surface before them —
+    // whichever certified result is closer to the input is kept.
+    const State before_moves = cur_;
+    const bool moved =
+        wanted(kStepDeintersect) && !done() && !cur_.report.self_intersections.empty() && deintersect().accepted;
+    if (wanted(kStepRegularize)) {
+      if (!done() && cur_.report.closed) regularize(cur_.soup, "regularize");
+      if (moved && before_moves.report.closed) regularize(before_moves.soup, "regularize (without local moves)");
+    }
     if (wanted(kStepRebuild) && !done()) rebuild();
     result_.soup = std::move(cur_.soup);
     r.seconds = seconds_since(t0);
@@ -97,17 +107,30 @@ class Pipeline {
     s.name = name;
     const auto t0 = std::chrono::steady_clock::now();
     try {
+      pending_fills_.clear();
       State next = inspected(run(s));
       s.faces_out = next.soup.face_count();
       s.defects_after = next.defects;
-      const bool better = certified(next.report, o_.for_tetgen) || next.defects < cur_.defects;
+      const bool next_ok = certified(next.report, o_.for_tetgen);
+      const double bound = 1e-4 * result_.report.diagonal;
+      next.hausdorff = detail::hausdorff_distance(input_, next.soup, bound);
+      s.hausdorff = next.hausdorff;
+      // Better: certified where the current surface is not; when both are,
+      // of the same topology (a union may merge or open up what local moves
+      // kept apart) and closer to the input; else fewer defects.
+      const bool both_ok = next_ok && done();
+      const bool better = both_ok ? topology_of(next.report) == topology_of(cur_.report) &&
+                                        next.hausdorff + bound < cur_.hausdorff
+                                  : next_ok || next.defects < cur_.defects;
       if (better) {
         s.accepted = true;
-        s.hausdorff = detail::hausdorff_distance(input_, next.soup, 1e-4 * result_.report.diagonal);
         cur_ = std::move(next);
+        if (!pending_fills_.empty()) result_.hole_fills = std::move(pending_fills_);
       } else {
-        s.outcome += (s.outcome.empty() ? "" : "; ") + std::string("not kept: ") + std::to_string(next.defects) +
-                     " defects after, " + std::to_string(cur_.defects) + " before";
+        s.outcome += (s.outcome.empty() ? "" : "; ") + std::string("not kept: ") +
+                     (both_ok ? "another topology than, or farther from the input than, the current surface"
+                                        : std::to_string(next.defects) + " defects after, " +
+                                              std::to_string(cur_.defects) + " before");
       }
     } catch (const UnsupportedInput& e) {
       s.outcome = std::string("refused: ") + e.what();
@@ -132,6 +155,12 @@ class Pipeline {
       co.max_hole_edges = o_.max_hole_edges;
       CleanSoupResult c = clean_soup(cur_.soup, co);
       const CleanSoupReport& r = c.report;
+      pending_fills_.clear();
+      for (std::size_t f = 0; f < c.soup.face_count(); ++f)
+        if (c.source[f] < 0) {
+          const FaceView v = c.soup.face(f);
+          pending_fills_.push_back({c.soup.points[v[0]], c.soup.points[v[1]], c.soup.points[v[2]]});
+        }
       s.counts = {{"welded_identical", double(r.identical_vertices_welded)},
                   {"welded_near", double(r.near_vertices_welded)},
                   {"repeated_index_faces", double(r.repeated_index_faces)},
@@ -175,8 +204,8 @@ class Pipeline {
     });
   }
 
-  void deintersect() {
-    stage("deintersect", [&](StageReport& s) {
+  const StageReport& deintersect() {
+    return stage("deintersect", [&](StageReport& s) {
       DeintersectOptions d;
       d.certify = false;
       d.observer = o_.observer;
@@ -196,12 +225,12 @@ class Pipeline {
     });
   }
 
-  void regularize() {
-    stage("regularize", [&](StageReport& s) {
+  void regularize(const Soup& from, const char* name) {
+    stage(name, [&](StageReport& s) {
       RegularizeOptions ro;
       ro.certify = false;
       ro.observer = o_.observer;
-      RegularizeResult res = polyheal::regularize(cur_.soup, ro);
+      RegularizeResult res = polyheal::regularize(from, ro);
       const RegularizeReport& r = res.report;
       s.counts = {{"intersecting_pairs_in", double(r.intersecting_pairs_in)},
                   {"triangles_split", double(r.triangles_split)},
@@ -243,6 +272,7 @@ class Pipeline {
   const RepairOptions& o_;
   State cur_;
   RepairResult result_;
+  std::vector<std::array<Point3d, 3>> pending_fills_;  // of the last clean run, until it is kept
 };
 
 double triangle_area(const Point3d& a, const Point3d& b, const Point3d& c) {
@@ -327,7 +357,8 @@ bool certified(const Report& r, bool for_tetgen) { return for_tetgen ? r.tetgen_
 
 RepairResult repair(const Soup& input, const RepairOptions& options) { return Pipeline(input, options).run(); }
 
-Assessment assess(const Soup& input, const Soup& written, double max_deviation, bool for_tetgen) {
+Assessment assess(const Soup& input, const Soup& written, double max_deviation, bool for_tetgen,
+                  const std::vector<std::array<Point3d, 3>>& hole_fills) {
   Assessment a;
   a.out = inspect(written);
   a.certified = certified(a.out, for_tetgen);
@@ -346,23 +377,30 @@ Assessment assess(const Soup& input, const Soup& written, double max_deviation, 
     a.dropped_components = loss.lost_components + loss.absorbed_components;
     a.absorbed_components = loss.absorbed_components;
     a.absorbed_faces = loss.absorbed_faces;
-    // The surface moved: how far the output is from the input, and the
-    // input (but for what the output encloses) from the output.
-    a.deviation = a.hausdorff;
-    if (loss.absorbed_faces) {
-      Soup visible;
-      visible.points = input.points;
-      for (std::size_t f = 0; f < input.face_count(); ++f)
-        if (!loss.absorbed[f]) {
-          const FaceView v = input.face(f);
-          visible.add_face(v.begin(), v.end());
-        } else {
-          a.area_absorbed += face_area(input, f);
-        }
-      const double visible_to_output =
-          visible.face_count() ? detail::one_sided_distances(visible, written, a.error_bound)[0] : 0.0;
-      a.deviation = std::max(a.output_to_input, visible_to_output);
+    // The surface moved: how far the output is from the input, but for
+    // faces spanning input vertices only (hole fills), and the input, but
+    // for what the output encloses, from the output.
+    std::set<std::array<Point3d, 3>> fill_keys;
+    for (std::array<Point3d, 3> t : hole_fills) {
+      std::sort(t.begin(), t.end());
+      fill_keys.insert(t);
     }
+    Soup moved, fills;
+    moved.points = fills.points = written.points;
+    for (std::size_t f = 0; f < written.face_count(); ++f) {
+      const FaceView v = written.face(f);
+      const bool fill = v.size() == 3 && fill_keys.count(corner_key(written, f).p) > 0;
+      (fill ? fills : moved).add_face(v.begin(), v.end());
+    }
+    double output_moved = moved.face_count() ? detail::one_sided_distances(moved, input, a.error_bound)[0] : 0.0;
+    a.fill_faces = fills.face_count();
+    if (fills.face_count()) a.fill_distance = detail::one_sided_distances(fills, input, a.error_bound)[0];
+    // The input inside the output's volume was removed, not moved: only
+    // what lies outside it counts.
+    const double input_visible = loss.outside_distance;
+    for (std::size_t f = 0; f < input.face_count(); ++f)
+      if (loss.absorbed[f]) a.area_absorbed += face_area(input, f);
+    a.deviation = std::max(output_moved, input_visible);
   } else if (input.face_count()) {
     a.dropped_components = a.components_in;
   }

@@ -22,6 +22,7 @@
 #pragma once
 
 #include <cstddef>
+#include <array>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -80,6 +81,10 @@ struct RepairReport {
 struct RepairResult {
   Soup soup;
   RepairReport report;
+  /// Corners of the triangles the clean stage added to fill holes, as they
+  /// are in `soup` (fills a later stage changed are not listed): assess()
+  /// reports them apart from moved surface.
+  std::vector<std::array<Point3d, 3>> hole_fills;
 };
 
 /// Defects that keep a surface from certification: boundary, non-manifold
@@ -95,12 +100,17 @@ struct Assessment {
   Report out;                              // the exact inspection of the written file
   bool certified = false;                  // out.certified_clean() (and tetgen_ready with for_tetgen)
   double hausdorff = -1, input_to_output = -1, output_to_input = -1, error_bound = 0;
-  // How far the surface moved: max(output -> input, input -> output over the
-  // input faces not absorbed). Input faces farther than max_deviation from
+  // How far the surface moved: max(output -> input, input -> output), the
+  // first over the output faces that are not hole fills (`hole_fills`: they
+  // add surface across an opening rather than move it; how far they are
+  // from the input is fill_distance), the second over the input outside
+  // the output's volume. Input faces farther than max_deviation from
   // the output and inside its volume (the inside of interpenetrating parts,
   // inner walls, enclosed components) are absorbed: removed, not moved;
   // their area is reported and whole components of them count as dropped.
   double deviation = -1;
+  double fill_distance = 0;
+  std::size_t fill_faces = 0;
   std::size_t absorbed_faces = 0;
   double area_absorbed = 0;
   double diagonal = 0;
@@ -114,6 +124,7 @@ struct Assessment {
   bool within_deviation = true;            // deviation <= max_deviation
 };
 
-Assessment assess(const Soup& input, const Soup& written, double max_deviation, bool for_tetgen);
+Assessment assess(const Soup& input, const Soup& written, double max_deviation, bool for_tetgen,
+                  const std::vector<std::array<Point3d, 3>>& hole_fills = {});
 
 }  // namespace polyheal

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <vector>
@@ -57,12 +58,20 @@ double norm(const Point3d& a, const Point3d& b) {
 /// `to`. A triangle whose bound does not exceed the largest distance seen so
 /// far (plus the error bound) is done; otherwise its longest edge is
 /// bisected (long thin triangles split along their length only).
-double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, double error_bound) {
+///
+/// With `skip`, points for which skip(p) holds do not count (they raise no
+/// lower bound), and a piece whose corners are all skipped and farther from
+/// `to` than its longest edge is dropped: it cannot reach `to`, so it lies
+/// wholly on its corners' side (skip must be constant between crossings of
+/// `to`, as "inside `to`'s volume" is).
+double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, double error_bound,
+                 const std::function<bool(const Point3d&)>* skip = nullptr) {
   struct Piece {
     Corners p;
     std::array<double, 3> d;          // distance of each corner to `to`
     std::array<std::size_t, 3> near;  // the triangle of `to` nearest each corner
     std::size_t best;                 // the triangle that gave the parent its bound
+    std::array<char, 3> skipped{};    // corners `skip` rules out
   };
   // Upper bound on a piece: the distance to one triangle is convex, so its
   // maximum over the piece is at a corner; try the triangles nearest the
@@ -92,18 +101,22 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
   std::vector<std::pair<double, std::size_t>> nearest(corners.size());
   if (!corners.empty()) nearest[0] = to.nearest(corners[0]);
   tbb::parallel_for(std::size_t(1), corners.size(), [&](std::size_t i) { nearest[i] = to.nearest(corners[i]); });
+  std::vector<char> skipped(corners.size(), 0);
+  if (skip)
+    tbb::parallel_for(std::size_t(0), corners.size(), [&](std::size_t i) { skipped[i] = (*skip)(corners[i]); });
   std::vector<Piece> stack;
   for (const Corners& t : from) {
     Piece piece;
     piece.p = t;
     for (int k = 0; k < 3; ++k) {
-      const auto at = std::lower_bound(corners.begin(), corners.end(), t[k]) - corners.begin();
-      const auto [d2, near] = nearest[static_cast<std::size_t>(at)];
+      const auto at = static_cast<std::size_t>(std::lower_bound(corners.begin(), corners.end(), t[k]) - corners.begin());
+      const auto [d2, near] = nearest[at];
       piece.d[k] = std::sqrt(d2);
       piece.near[k] = near;
+      piece.skipped[k] = skipped[at];
+      if (!skipped[at]) lower = std::max(lower, piece.d[k]);
     }
     piece.best = piece.near[0];
-    lower = std::max({lower, piece.d[0], piece.d[1], piece.d[2]});
     stack.push_back(piece);
   }
   while (!stack.empty()) {
@@ -112,6 +125,9 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
     const std::array<double, 3> edge{norm(piece.p[1], piece.p[2]), norm(piece.p[2], piece.p[0]),
                                      norm(piece.p[0], piece.p[1])};  // edge k is opposite corner k
     const int k = static_cast<int>(std::max_element(edge.begin(), edge.end()) - edge.begin());
+    if (piece.skipped[0] && piece.skipped[1] && piece.skipped[2] &&
+        *std::min_element(piece.d.begin(), piece.d.end()) > edge[k])
+      continue;
     // 1-Lipschitz bound first (free), then the convexity bound
     if (*std::min_element(piece.d.begin(), piece.d.end()) + edge[k] <= lower + error_bound) continue;
     if (upper_bound(piece) <= lower + error_bound) continue;
@@ -121,14 +137,17 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
     if (m == piece.p[i] || m == piece.p[j]) continue;  // no double left between them
     const auto [dm2, near] = to.nearest(m, piece.best);
     const double dm = std::sqrt(dm2);
-    lower = std::max(lower, dm);
+    const bool skip_m = skip && (*skip)(m);
+    if (!skip_m) lower = std::max(lower, dm);
     Piece a = piece, b = piece;
     a.p[j] = m;
     a.d[j] = dm;
     a.near[j] = near;
+    a.skipped[j] = skip_m;
     b.p[i] = m;
     b.d[i] = dm;
     b.near[i] = near;
+    b.skipped[i] = skip_m;
     stack.push_back(a);
     stack.push_back(b);
   }
@@ -250,6 +269,18 @@ std::array<double, 2> one_sided_distances(const Soup& a, const Soup& b, double e
   const double ab = only_a.empty() ? 0.0 : one_sided(only_a, SurfaceDistance(tb), error_bound);
   const double ba = only_b.empty() ? 0.0 : one_sided(only_b, SurfaceDistance(ta), error_bound);
   return {ab, ba};
+}
+
+double one_sided_distance_skipping(const Soup& a, const Soup& b, double error_bound,
+                                   const std::function<bool(const Point3d&)>& skip) {
+  std::vector<Corners> ta = triangles_of(a), tb = triangles_of(b);
+  std::vector<Corners> sa = ta, sb = tb;
+  std::sort(sa.begin(), sa.end());
+  std::sort(sb.begin(), sb.end());
+  std::vector<Corners> only_a;
+  std::set_difference(sa.begin(), sa.end(), sb.begin(), sb.end(), std::back_inserter(only_a));
+  if (tb.empty() && !only_a.empty()) return -1.0;
+  return only_a.empty() ? 0.0 : one_sided(only_a, SurfaceDistance(tb), error_bound, &skip);
 }
 
 double hausdorff_distance(const Soup& a, const Soup& b, double error_bound) {

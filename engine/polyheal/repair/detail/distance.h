@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -69,5 +70,11 @@ double hausdorff_distance(const Soup& a, const Soup& b, double error_bound);
 /// The two one-sided distances of hausdorff_distance: {from a to b, from b
 /// to a} (how far a point of a can be from b, and the other way round).
 std::array<double, 2> one_sided_distances(const Soup& a, const Soup& b, double error_bound);
+
+/// The distance from a to b over the points p of a where skip(p) is false
+/// (e.g. "inside b's volume": how far the part of a that b does not enclose
+/// is from b). `skip` must change only where a crosses b.
+double one_sided_distance_skipping(const Soup& a, const Soup& b, double error_bound,
+                                   const std::function<bool(const Point3d&)>& skip);
 
 }  // namespace polyheal::detail
