@@ -34,4 +34,7 @@ void add_repair(CLI::App& app, int& exit_code);
 /// Adds `compare` (another tool's output against its input).
 void add_compare(CLI::App& app, int& exit_code);
 
+/// Adds `batch` (repair over many files, one process each).
+void add_batch(CLI::App& app, int& exit_code);
+
 }  // namespace polyheal::cli

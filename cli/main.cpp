@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   add_repair(app, exit_code);
   add_check(app, exit_code);
   add_compare(app, exit_code);
+  add_batch(app, exit_code);
   add_degenerate(app, exit_code);
   add_deintersect(app, exit_code);
   add_regularize(app, exit_code);

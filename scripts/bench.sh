@@ -2,7 +2,8 @@
 # Benchmarks each polyheal command against its CGAL peer on the same files, in
 # one run, and rewrites the tables in BENCHMARKS.md: check (vs read_polygon_mesh
 # + self_intersections), degenerate, deintersect, regularize (vs the
-# PMP::experimental repair functions), rebuild (vs CGAL::alpha_wrap_3).
+# PMP::experimental repair functions), rebuild (vs CGAL::alpha_wrap_3), repair
+# (vs a CGAL PMP soup-repair + remove_self_intersections pipeline).
 #
 #   scripts/bench.sh                               # every section
 #   BENCH_ONLY=regularize,deintersect scripts/bench.sh   # those sections; the others are kept as they are
@@ -12,7 +13,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/setup.sh"
 command -v /usr/bin/time >/dev/null || { sudo=""; [ "$(id -u)" -ne 0 ] && sudo=sudo; $sudo apt-get install -y -qq time; }
 "$root/scripts/build.sh" --target polyheal polyheal_gen cgal_check_peer cgal_degenerate_peer cgal_deintersect_peer \
-  cgal_regularize_peer cgal_rebuild_peer >/dev/null
+  cgal_regularize_peer cgal_rebuild_peer cgal_repair_peer >/dev/null
 b="$root/build"; work="$b/bench"; mkdir -p "$work"
 runs=${BENCH_RUNS:-3}
 only=${BENCH_ONLY:-all}
@@ -296,6 +297,59 @@ if want rebuild; then
   done
 fi
 
+# --- polyheal repair vs a CGAL PMP repair pipeline (one run each) ---
+rp_rows=""; rp_count=0; rp_ours=0; rp_cgal=0; rp_exit0=0; rp_h=""; rp_moved=""; rp_hc=""
+if want repair; then
+  rp_inputs=()
+  for f in tube_edge3.0.off tube_edge4.0.off tube_edge2.42_offset-0.15.off knot_tube_r1.2.off dirty_box.obj cad_cylinder.off; do
+    rp_inputs+=("$root/fixtures/$f")
+  done
+  while IFS= read -r f; do rp_inputs+=("$corpus/$f"); done < <(awk -F'\t' 'NR > 1 {print $1}' "$corpus/MANIFEST.tsv")
+  for f in "${rp_inputs[@]}"; do
+    [ -f "$f" ] || continue
+    name=$(basename "$f")
+    rp_count=$((rp_count + 1))
+    code=0
+    /usr/bin/time -f "%e %M" -o "$work/time.txt" timeout 1200 "$b/polyheal" repair --json --overwrite "$f" \
+      -o "$work/rp_ours.off" > "$work/rp.json" 2>"$work/rp.err" || code=$?
+    read -r ours_s ours_kb < <(tail -n 1 "$work/time.txt")
+    if [ "$code" -ge 2 ]; then
+      rp_rows+="| $name | | error: $(head -c 100 "$work/rp.err") | | | | | | | | | | |"$'\n'
+      continue
+    fi
+    [ "$code" -eq 0 ] && rp_exit0=$((rp_exit0 + 1))
+    faces=$(sed -n '/"input_mesh"/,/}/p' "$work/rp.json" | json_num faces /dev/stdin)
+    out_faces=$(sed -n '/"output_mesh"/,/}/p' "$work/rp.json" | json_num faces /dev/stdin)
+    v=$(verdict "$work/rp_ours.off")
+    [ "$v" = certified ] && rp_ours=$((rp_ours + 1))
+    kept_f=$(json_num face_fraction "$work/rp.json"); kept_a=$(json_num area_fraction_of_input "$work/rp.json")
+    h=$(json_num hausdorff_relative "$work/rp.json")
+    diag=$(awk -v h="$(json_num hausdorff "$work/rp.json")" -v r="$h" 'BEGIN{print (r > 0 ? h / r : 0)}')
+    moved=$(json_num surface_moved "$work/rp.json")
+    moved_rel=$(awk -v m="$moved" -v d="$diag" -v h="$h" 'BEGIN{print (d > 0 ? m / d : (h == 0 ? 0 : -1))}')
+    rp_h+="$h"$'\n'; rp_moved+="$moved_rel"$'\n'
+    stages=$(grep -o '"name": "[a-z ()]*"\|"accepted": [a-z]*' "$work/rp.json" | paste - - | awk -F'"' '$3 ~ /true/ {print $6}' | paste -sd, - )
+    ours="$v | $code | ${stages:-none} | $out_faces | $(awk -v f="$kept_f" -v a="$kept_a" 'BEGIN{printf "%.0f%% / %.0f%%", 100 * f, 100 * a}') | $(awk -v h="$h" -v m="$moved_rel" 'BEGIN{printf "%.3g%% / %.3g%%", 100 * h, 100 * m}') | $ours_s s, $((ours_kb / 1024)) MB"
+    peer="crashed or timed out | | | "
+    code=0
+    /usr/bin/time -f "%e %M" -o "$work/time.txt" timeout 300 "$b/cgal_repair_peer" "$f" "$work/rp_cgal.off" \
+      > "$work/peer.txt" 2>/dev/null || code=$?
+    if [ "$code" -eq 0 ]; then
+      read -r cg_s cg_faces < "$work/peer.txt"
+      read -r cg_wall cg_kb < <(tail -n 1 "$work/time.txt")
+      cv=$(verdict "$work/rp_cgal.off")
+      [ "$cv" = certified ] && rp_cgal=$((rp_cgal + 1))
+      read -r cio coi cdiag < <("$b/polyheal_gen" distance "$f" "$work/rp_cgal.off" 2>/dev/null || echo "- - -")
+      ch=$(awk -v a="$cio" -v c="$coi" -v d="$cdiag" 'BEGIN{ if (d + 0 > 0 && a != "-" && a >= 0 && c >= 0) printf "%.4g", (a > c ? a : c) / d; else print "-" }')
+      [ "$ch" != "-" ] && rp_hc+="$ch"$'\n'
+      peer="$cv | $cg_faces | $(awk -v h="$ch" 'BEGIN{ if (h == "-") print "—"; else printf "%.3g%%", 100 * h}') | $cg_wall s, $((cg_kb / 1024)) MB"
+    fi
+    rp_rows+="| $name | $faces | $ours | $peer |"$'\n'
+    echo "$name: polyheal repair $ours_s s ($v); CGAL pipeline ${cg_wall:-?} s" >&2
+  done
+fi
+median() { sort -g | awk '{a[NR] = $1} END { if (NR == 0) print "-"; else if (NR % 2) printf "%.3g%%", 100 * a[(NR + 1) / 2]; else printf "%.3g%%", 100 * (a[NR / 2] + a[NR / 2 + 1]) / 2 }'; }
+
 run_line="Run: $(date -u +%Y-%m-%d), polyheal $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown), Release build."
 # old_section HEADING: that section of the current BENCHMARKS.md, as it stands (a section not rerun)
 old_section() {
@@ -478,6 +532,43 @@ with fewer faces.
 
 TAIL
   else old_section '## `polyheal rebuild`'; fi
+  if want repair; then
+  cat <<'TAIL'
+## `polyheal repair` vs a CGAL PMP repair pipeline
+
+TAIL
+  echo "$run_line"
+  cat <<'TAIL'
+
+Every corpus mesh (../shared/corpus, all categories: self-intersecting, CAD
+tessellations, dirty soups, clean) and the generated fixtures, repaired with the
+defaults. Peer (`scripts/gen/cgal_repair_peer.cpp`): what a CGAL user assembles from
+PMP — `repair_polygon_soup`, `orient_polygon_soup`, `polygon_soup_to_polygon_mesh`,
+`triangulate_faces`, `stitch_borders`, `triangulate_hole` on every border, then
+`PMP::experimental::remove_self_intersections`. "verdict": `polyheal check` on each
+written file. "exit": polyheal's exit code (0: certified, surface moved within 1% of
+the diagonal, no component dropped). "stages": those whose result was kept.
+"kept": output faces that are input faces exactly / input area they keep. "H / moved":
+symmetric Hausdorff distance to the input / surface moved (hole fills and input
+enclosed by the output excluded; see README), % of the diagonal. CGAL's H: the same
+measure (`polyheal_gen distance`). Time: the whole process (read, repair, write, read
+back, assess) for polyheal; the peer's wall time with I/O. One run each.
+
+| input | faces | polyheal verdict | exit | stages | faces out | kept faces / area | H / moved | polyheal time | CGAL verdict | faces out | H | CGAL time |
+| --- | ---: | --- | ---: | --- | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: |
+TAIL
+  printf "%s" "$rp_rows"
+  cat <<TAIL
+
+Inputs: $rp_count. Certified: polyheal $rp_ours, CGAL pipeline $rp_cgal. polyheal exit 0
+(certified and within bounds): $rp_exit0. Median Hausdorff: polyheal $(printf "%s" "$rp_h" | median)
+(surface moved $(printf "%s" "$rp_moved" | awk '$1 >= 0' | median)), CGAL pipeline $(printf "%s" "$rp_hc" | median) over the
+outputs it wrote.
+
+Targets (issue 7): 100% certified; median Hausdorff under 0.1% of the bbox diagonal.
+
+TAIL
+  else old_section '## `polyheal repair`'; fi
 } > "$root/BENCHMARKS.md.new"
 if [ -f "$root/BENCHMARKS.md" ] && grep -q '^## Notes' "$root/BENCHMARKS.md"; then
   sed -n '/^## Notes/,$p' "$root/BENCHMARKS.md" | { echo; cat; } >> "$root/BENCHMARKS.md.new"

@@ -194,5 +194,20 @@ expect 0 "compare --json" -- "$bin" compare --json "$src/fixtures/torus.off" "$s
 grep_out '"schema": "polyheal.compare/1"' "$tmp/out" "compare json schema tag"
 grep_out '"topology_changed": false' "$tmp/out" "compare json topology"
 expect 2 "compare a missing file" -- "$bin" compare "$src/fixtures/torus.off" "$tmp/none.off"
+# polyheal batch
+printf '# a list\n%s\n\n%s\n%s\n' "$src/fixtures/tube_edge3.0.off" "$src/fixtures/torus.off" "$tmp/bad.off" > "$tmp/list.txt"
+expect 1 "batch goes on past a bad file and exits 1" -- "$bin" batch "$tmp/list.txt" -o "$tmp/batch" -j 2
+grep_out "2 certified, 1 error" "$tmp/out" "batch counts by status"
+grep_out "bad.off:line 4: non-numeric coordinate" "$tmp/batch/summary.csv" "batch summary keeps the error line"
+grep_out '"schema": "polyheal.batch/1"' "$tmp/batch/summary.json" "batch json summary"
+expect 0 "a batch output checks clean" -- "$bin" check "$tmp/batch/tube_edge3.0.off"
+expect 1 "batch shard 1/2 (the tube and the bad file)" -- "$bin" batch "$tmp/list.txt" -o "$tmp/shard1" --shard 1/2
+expect 0 "batch shard 2/2 (the torus)" -- "$bin" batch "$tmp/list.txt" -o "$tmp/shard2" --shard 2/2
+[ "$(cat "$tmp/shard1/summary.csv" "$tmp/shard2/summary.csv" | grep -vc '^input,')" -eq 3 ] && \
+  ! cut -d, -f1 "$tmp/shard1/summary.csv" | grep -qxF -f <(cut -d, -f1 "$tmp/shard2/summary.csv" | tail -n +2) \
+  && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: shards do not split the list exactly"; }
+expect 1 "batch stops a file at its time limit" -- "$bin" batch "$src/fixtures/dirty_box.obj" -o "$tmp/batch_t" --timeout 0.05
+expect 2 "batch rejects a bad shard" -- "$bin" batch "$tmp/list.txt" -o "$tmp/batch_x" --shard 3/2
+expect 2 "batch rejects a missing list" -- "$bin" batch "$tmp/nolist.txt" -o "$tmp/batch_y"
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]
