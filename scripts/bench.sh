@@ -328,7 +328,7 @@ if want repair; then
     moved=$(json_num surface_moved "$work/rp.json")
     moved_rel=$(awk -v m="$moved" -v d="$diag" -v h="$h" 'BEGIN{print (d > 0 ? m / d : (h == 0 ? 0 : -1))}')
     rp_h+="$h"$'\n'; rp_moved+="$moved_rel"$'\n'
-    stages=$(grep -o '"name": "[a-z ()]*"\|"accepted": [a-z]*' "$work/rp.json" | paste - - | awk -F'"' '$3 ~ /true/ {print $6}' | paste -sd, - )
+    stages=$({ grep -o '"name": "[a-z ()]*"\|"accepted": [a-z]*' "$work/rp.json" || true; } | paste - - | awk -F'"' '$3 ~ /true/ {print $6}' | paste -sd, - )
     ours="$v | $code | ${stages:-none} | $out_faces | $(awk -v f="$kept_f" -v a="$kept_a" 'BEGIN{printf "%.0f%% / %.0f%%", 100 * f, 100 * a}') | $(awk -v h="$h" -v m="$moved_rel" 'BEGIN{printf "%.3g%% / %.3g%%", 100 * h, 100 * m}') | $ours_s s, $((ours_kb / 1024)) MB"
     peer="crashed or timed out | | | "
     code=0

@@ -397,7 +397,9 @@ Assessment assess(const Soup& input, const Soup& written, double max_deviation, 
     if (fills.face_count()) a.fill_distance = detail::one_sided_distances(fills, input, a.error_bound)[0];
     // The input inside the output's volume was removed, not moved: only
     // what lies outside it counts.
-    const double input_visible = loss.outside_distance;
+    // (The plain one-sided distance bounds it: the skipping measure may
+    // over-estimate where it ran out of budget.)
+    const double input_visible = std::min(loss.outside_distance, a.input_to_output);
     for (std::size_t f = 0; f < input.face_count(); ++f)
       if (loss.absorbed[f]) a.area_absorbed += face_area(input, f);
     a.deviation = std::max(output_moved, input_visible);

@@ -1416,7 +1416,7 @@ Loss measure_loss(const Soup& input, const Soup& written, double far) {
   for (std::size_t c = 0; c < topo.components; ++c)
     if (!near[c]) ++(absorbed[c] ? loss.absorbed_components : loss.lost_components);
   loss.outside_distance = detail::one_sided_distance_skipping(
-      input, written, 0.01 * far, [&](const Point3d& p) { return inside_output(p) > 0.5; });
+      input, written, 0.05 * far, [&](const Point3d& p) { return inside_output(p) > 0.5; });
   loss.lost_area_fraction = area > 0 ? lost_area / area : 0;
   return loss;
 }

@@ -143,7 +143,7 @@ struct Loss {
   std::size_t lost_components = 0, absorbed_components = 0;
   double lost_area_fraction = 0;
   std::vector<char> absorbed;  // per input face
-  double outside_distance = 0; // from the input outside the written volume to the written surface (error 1% of far)
+  double outside_distance = 0; // from the input outside the written volume to the written surface (error 5% of far)
 };
 Loss measure_loss(const Soup& input, const Soup& written, double far);
 

@@ -60,10 +60,12 @@ double norm(const Point3d& a, const Point3d& b) {
 /// bisected (long thin triangles split along their length only).
 ///
 /// With `skip`, points for which skip(p) holds do not count (they raise no
-/// lower bound), and a piece whose corners are all skipped and farther from
-/// `to` than its longest edge is dropped: it cannot reach `to`, so it lies
-/// wholly on its corners' side (skip must be constant between crossings of
-/// `to`, as "inside `to`'s volume" is).
+/// lower bound). A piece whose corners are all skipped is done when its
+/// longest edge is within the bound (its unskipped points lie beyond a
+/// crossing of `to`, so within that edge of it) or when its corners are
+/// farther from `to` than that edge (it lies wholly on their side). skip
+/// must change only where the piece crosses `to`, as "inside `to`'s volume"
+/// does.
 double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, double error_bound,
                  const std::function<bool(const Point3d&)>* skip = nullptr) {
   struct Piece {
@@ -101,6 +103,8 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
   std::vector<std::pair<double, std::size_t>> nearest(corners.size());
   if (!corners.empty()) nearest[0] = to.nearest(corners[0]);
   tbb::parallel_for(std::size_t(1), corners.size(), [&](std::size_t i) { nearest[i] = to.nearest(corners[i]); });
+  constexpr std::size_t kSkippedSplitBudget = 50000;
+  std::size_t skipped_splits = 0;
   std::vector<char> skipped(corners.size(), 0);
   if (skip)
     tbb::parallel_for(std::size_t(0), corners.size(), [&](std::size_t i) { skipped[i] = (*skip)(corners[i]); });
@@ -125,9 +129,20 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
     const std::array<double, 3> edge{norm(piece.p[1], piece.p[2]), norm(piece.p[2], piece.p[0]),
                                      norm(piece.p[0], piece.p[1])};  // edge k is opposite corner k
     const int k = static_cast<int>(std::max_element(edge.begin(), edge.end()) - edge.begin());
-    if (piece.skipped[0] && piece.skipped[1] && piece.skipped[2] &&
-        *std::min_element(piece.d.begin(), piece.d.end()) > edge[k])
-      continue;
+    // All corners skipped: a point of the piece that is not skipped lies
+    // beyond a crossing of `to` on its segment to a corner, so within the
+    // longest edge of `to`; and the piece cannot reach `to` at all when its
+    // corners are farther than that edge.
+    if (piece.skipped[0] && piece.skipped[1] && piece.skipped[2]) {
+      if (edge[k] <= lower + error_bound || *std::min_element(piece.d.begin(), piece.d.end()) > edge[k]) continue;
+      // Input running just inside `to` over a large area would take pieces
+      // of the error bound's size: past a budget, such a piece counts with
+      // its bound (the result then over-estimates, never under-estimates).
+      if (++skipped_splits > kSkippedSplitBudget) {
+        lower = std::max(lower, edge[k]);
+        continue;
+      }
+    }
     // 1-Lipschitz bound first (free), then the convexity bound
     if (*std::min_element(piece.d.begin(), piece.d.end()) + edge[k] <= lower + error_bound) continue;
     if (upper_bound(piece) <= lower + error_bound) continue;
