@@ -11,14 +11,17 @@
 #include "progress.h"
 #include "certificate.h"
 #include "polyheal/mesh/errors.h"
+#include <filesystem>
 #include <fstream>
+#include <cstdlib>
+#include "polyheal/io/write.h"
 
 namespace polyheal::cli {
 namespace {
 
 struct CheckArgs {
   std::string file, certificate;
-  bool json = false, list = false, tetgen_ready = false, sequential = false;
+  bool json = false, list = false, tetgen_ready = false, sequential = false, tetgen = false;
   InspectOptions inspect;
 };
 
@@ -147,6 +150,49 @@ void print_text(const CheckArgs& args, const Report& r, double total_s) {
               total_s);
 }
 
+/// `check --tetgen`: TetGen's own self-intersection test (`tetgen -d`) on
+/// the mesh as read (written as OFF into a temporary directory: TetGen
+/// writes beside its input and reads no OBJ). Returns {ran, pairs, line}:
+/// pairs -1 when TetGen's output could not be read.
+struct TetgenVerdict {
+  bool ran = false;
+  long pairs = -1;
+  std::string line;  // TetGen's own words
+};
+TetgenVerdict run_tetgen_d(const Soup& soup) {
+  TetgenVerdict v;
+  if (std::system("command -v tetgen >/dev/null 2>&1") != 0) {
+    v.line = "tetgen is not installed";
+    return v;
+  }
+  char dir[] = "/tmp/polyheal-tetgen-XXXXXX";
+  if (!mkdtemp(dir)) {
+    v.line = "cannot make a temporary directory";
+    return v;
+  }
+  const std::string path = std::string(dir) + "/mesh.off";
+  write_soup(soup, path);
+  const std::string cmd = "cd '" + std::string(dir) + "' && timeout 600 tetgen -d mesh.off 2>&1";
+  std::string out;
+  if (FILE* p = popen(cmd.c_str(), "r")) {
+    char buf[4096];
+    while (std::size_t n = std::fread(buf, 1, sizeof buf, p)) out.append(buf, n);
+    pclose(p);
+    v.ran = true;
+  }
+  std::filesystem::remove_all(dir);
+  if (out.find("No faces are intersecting.") != std::string::npos) {
+    v.pairs = 0;
+    v.line = "No faces are intersecting.";
+  } else if (const std::size_t at = out.find("Found "); at != std::string::npos) {
+    v.pairs = std::strtol(out.c_str() + at + 6, nullptr, 10);
+    v.line = out.substr(at, out.find('\n', at) - at);
+  } else {
+    v.line = "unrecognised tetgen output";
+  }
+  return v;
+}
+
 /// `check FILE --certificate C`: the file's SHA-256 against the
 /// certificate's output hash, and each recorded check against the exact
 /// inspection now. Returns what differs (empty: it matches), printed unless --json.
@@ -210,6 +256,9 @@ void add_check(CLI::App& app, int& exit_code) {
                   "TetGen: adjacent faces folded below this angle are 'nearly self-intersecting' (degrees)")
       ->default_val(0.1)->check(CLI::Range(0.0, 90.0));
   cmd->add_flag("--sequential", args->sequential, "do not use threads");
+  cmd->add_flag("--tetgen", args->tetgen,
+                "also run TetGen's own test (tetgen -d, when installed) and print its verdict beside ours "
+                "(does not change the exit code)");
   cmd->add_option("--certificate", args->certificate,
                   "confirm FILE matches this certificate (written by repair --certificate): its SHA-256 and "
                   "every recorded check; exit 1 on any difference");
@@ -228,6 +277,16 @@ void add_check(CLI::App& app, int& exit_code) {
     nlohmann::json j;
     if (args->json) j = to_json(*args, r, read_s, total_s);
     else print_text(*args, r, total_s);
+    if (args->tetgen) {
+      const TetgenVerdict t = run_tetgen_d(soup);
+      if (args->json) {
+        j["tetgen"] = {{"ran", t.ran}, {"intersecting_pairs", t.pairs}, {"message", t.line}};
+      } else {
+        std::printf("  tetgen -d: %s (polyheal: %zu self-intersecting pairs%s)\n", t.line.c_str(),
+                    r.self_intersections.size(),
+                    t.pairs < 0 ? "" : (t.pairs == 0) == r.self_intersections.empty() ? "; verdicts agree" : "; verdicts DIFFER");
+      }
+    }
     if (!args->certificate.empty()) {
       const std::vector<std::string> mismatches = confirm_certificate(*args, r);
       matches = mismatches.empty();

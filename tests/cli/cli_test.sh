@@ -209,5 +209,12 @@ expect 0 "batch shard 2/2 (the torus)" -- "$bin" batch "$tmp/list.txt" -o "$tmp/
 expect 1 "batch stops a file at its time limit" -- "$bin" batch "$src/fixtures/dirty_box.obj" -o "$tmp/batch_t" --timeout 0.05
 expect 2 "batch rejects a bad shard" -- "$bin" batch "$tmp/list.txt" -o "$tmp/batch_x" --shard 3/2
 expect 2 "batch rejects a missing list" -- "$bin" batch "$tmp/nolist.txt" -o "$tmp/batch_y"
+# check --tetgen: TetGen's verdict beside ours
+expect 1 "check --tetgen on the coarse tube" -- "$bin" check --tetgen "$src/fixtures/tube_edge3.0.off"
+grep_out "tetgen -d: Found .* pairs of faces are intersecting.*verdicts agree" "$tmp/out" "tetgen -d finds the intersections too"
+expect 0 "check --tetgen on the clean torus" -- "$bin" check --tetgen "$src/fixtures/torus.off"
+grep_out "tetgen -d: No faces are intersecting.*verdicts agree" "$tmp/out" "tetgen -d agrees the torus is clean"
+expect 1 "check --tetgen reads OBJ for TetGen" -- "$bin" check --tetgen --json "$src/fixtures/dirty_box.obj"
+grep_out '"ran": true' "$tmp/out" "tetgen ran on an OBJ input"
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]
