@@ -37,4 +37,7 @@ void add_compare(CLI::App& app, int& exit_code);
 /// Adds `batch` (repair over many files, one process each).
 void add_batch(CLI::App& app, int& exit_code);
 
+/// Adds `perturb` (adversarial degenerate tessellations).
+void add_perturb(CLI::App& app, int& exit_code);
+
 }  // namespace polyheal::cli

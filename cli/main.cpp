@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   add_check(app, exit_code);
   add_compare(app, exit_code);
   add_batch(app, exit_code);
+  add_perturb(app, exit_code);
   add_degenerate(app, exit_code);
   add_deintersect(app, exit_code);
   add_regularize(app, exit_code);

@@ -216,5 +216,12 @@ expect 0 "check --tetgen on the clean torus" -- "$bin" check --tetgen "$src/fixt
 grep_out "tetgen -d: No faces are intersecting.*verdicts agree" "$tmp/out" "tetgen -d agrees the torus is clean"
 expect 1 "check --tetgen reads OBJ for TetGen" -- "$bin" check --tetgen --json "$src/fixtures/dirty_box.obj"
 grep_out '"ran": true' "$tmp/out" "tetgen ran on an OBJ input"
+# polyheal perturb
+expect 0 "perturb near-collinear" -- "$bin" perturb "$src/fixtures/torus.off" -o "$tmp/pt1.off" --kind near-collinear --seed 5
+expect 0 "perturb again with the same seed" -- "$bin" perturb "$src/fixtures/torus.off" -o "$tmp/pt2.off" --kind near-collinear --seed 5
+cmp -s "$tmp/pt1.off" "$tmp/pt2.off" && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: perturb is not reproducible"; }
+expect 1 "a perturbed mesh is not TetGen-ready" -- "$bin" check --tetgen-ready "$tmp/pt1.off"
+expect 2 "perturb rejects an unknown kind" -- "$bin" perturb "$src/fixtures/torus.off" -o "$tmp/pt3.off" --kind noise
+expect 2 "perturb never writes over its input" -- "$bin" perturb "$tmp/pt1.off" -o "$tmp/pt1.off" --kind slivers --overwrite
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]
