@@ -195,7 +195,7 @@ TEST_CASE("read: PLY ascii and binary big endian, extra properties skipped", "[i
   CHECK(s.face(0)[2] == 2);
 }
 
-TEST_CASE("read: large OFF is parsed in parallel chunks; the first error in file order wins", "[io]") {
+TEST_CASE("read: large OFF is parsed in parallel chunks, the first error in file order wins", "[io]") {
   // 100k vertices and 100k faces: several chunks of each kind.
   const std::size_t n = 100000;
   auto body = [&](std::size_t bad_vertex, std::size_t bad_face) {

@@ -19,7 +19,7 @@ TEST_CASE("sha256: standard vectors", "[sha256]") {
   CHECK(sha256_hex(std::string(1000000, 'a')) == "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
 }
 
-TEST_CASE("sha256: a file is hashed as its bytes; a missing file is an input error", "[sha256]") {
+TEST_CASE("sha256: a file is hashed as its bytes, a missing file is an input error", "[sha256]") {
   const std::string p = test::scratch("sha_abc.bin");
   test::write_bytes(p, "abc");
   CHECK(sha256_file(p) == sha256_hex("abc"));

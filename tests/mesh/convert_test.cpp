@@ -84,7 +84,7 @@ TEST_CASE("convert: exact coordinates round to the nearest double", "[mesh]") {
   CHECK(s.points[1][1] == 1e300 / 7);
 }
 
-TEST_CASE("convert: pinch copies share one identity; every other vertex, old or new, is itself", "[mesh]") {
+TEST_CASE("convert: pinch copies share one identity, every other vertex, old or new, is itself", "[mesh]") {
   // Two tetrahedra touching at one corner, the origin: a pinch point whose
   // two fans get a vertex each.
   const Soup touching = test::concat(test::tetrahedron(), test::tetrahedron(-1, 0, 0));
@@ -99,7 +99,8 @@ TEST_CASE("convert: pinch copies share one identity; every other vertex, old or 
   REQUIRE(pinned);
   std::vector<vertex_descriptor> at_origin;
   for (vertex_descriptor v : m.vertices())
-    if (m.point(v) == Point(0, 0, 0)) at_origin.push_back(v);
+    if (m.is_isolated(v)) continue;  // the welded-away twin of the origin stays, unused
+    else if (m.point(v) == Point(0, 0, 0)) at_origin.push_back(v);
     else CHECK(vertex_identity(identity, v) == static_cast<std::uint32_t>(v));
   REQUIRE(at_origin.size() == 2);
   CHECK(vertex_identity(identity, at_origin[0]) == vertex_identity(identity, at_origin[1]));

@@ -45,7 +45,7 @@ TEST_CASE("repair: a clean input is returned unchanged, no stage runs", "[pipeli
   CHECK(a.faces_kept == in.face_count());
 }
 
-TEST_CASE("repair: narrow tube walls are freed by local moves; faces away keep their coordinates", "[pipeline]") {
+TEST_CASE("repair: narrow tube walls are freed by local moves, faces away keep their coordinates", "[pipeline]") {
   const Soup in = read_soup(test::fixture("tube_edge3.0.off"));
   REQUIRE_FALSE(inspect(in).self_intersections.empty());
   const RepairResult r = repair(in);
@@ -58,7 +58,7 @@ TEST_CASE("repair: narrow tube walls are freed by local moves; faces away keep t
   CHECK(a.dropped_components == 0);
 }
 
-TEST_CASE("repair: interpenetrating spheres become their union; the inside is absorbed, not moved", "[pipeline]") {
+TEST_CASE("repair: interpenetrating spheres become their union, the inside is absorbed, not moved", "[pipeline]") {
   const Soup in = read_soup(test::fixture("spheres_intersecting.off"));
   const RepairResult r = repair(in);
   CHECK(ran(r.report, "regularize", true));
@@ -80,7 +80,7 @@ TEST_CASE("repair: a dirty soup falls back to the overlay grid and comes out cer
   CHECK(a.dropped_components == 0);
 }
 
-TEST_CASE("repair: --steps limits the stages; what is left is reported, not hidden", "[pipeline]") {
+TEST_CASE("repair: --steps limits the stages, what is left is reported, not hidden", "[pipeline]") {
   const Soup in = read_soup(test::fixture("spheres_intersecting.off"));
   RepairOptions o;
   o.steps = parse_steps("clean,degenerate");
@@ -92,7 +92,7 @@ TEST_CASE("repair: --steps limits the stages; what is left is reported, not hidd
   CHECK_THROWS_AS(parse_steps("clean,polish"), std::invalid_argument);
 }
 
-TEST_CASE("assess: a dropped component is found; one inside the output counts as absorbed", "[pipeline]") {
+TEST_CASE("assess: a dropped component is found, one inside the output counts as absorbed", "[pipeline]") {
   const Soup big = test::soup({{-1, -1, -1}, {4, -1, -1}, {-1, 4, -1}, {-1, -1, 4}},
                               {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
   const Soup inner = test::tetrahedron(0, 0, 0);      // inside big

@@ -131,7 +131,7 @@ TEST_CASE("regularize: three boxes with a triple overlap and edges through face 
   CHECK(off_surface(in, out) < 1e-12);
 }
 
-TEST_CASE("regularize: a solid inside another is removed (and counted); a cavity is kept") {
+TEST_CASE("regularize: a solid inside another is removed (and counted), a cavity is kept") {
   const Box big{{{0, 0, 0}, {4, 4, 4}}}, small{{{1, 1.5, 1.25}, {2, 2.5, 2.25}}};
   SECTION("enclosed solid") {
     const RegularizeResult r = regularize(test::concat(box(big), box(small)));
