@@ -373,7 +373,10 @@ Assessment assess(const Soup& input, const Soup& written, double max_deviation, 
     a.input_to_output = d[0];
     a.output_to_input = d[1];
     a.hausdorff = std::max(d[0], d[1]);
-    const Loss loss = measure_loss(input, written, max_deviation);
+    // The input outside the output's volume is measured apart only when the
+    // plain distance exceeds the bound (it bounds the refined one).
+    const bool refine = a.input_to_output > max_deviation;
+    const Loss loss = measure_loss(input, written, max_deviation, refine);
     a.dropped_components = loss.lost_components + loss.absorbed_components;
     a.absorbed_components = loss.absorbed_components;
     a.absorbed_faces = loss.absorbed_faces;
@@ -399,7 +402,7 @@ Assessment assess(const Soup& input, const Soup& written, double max_deviation, 
     // what lies outside it counts.
     // (The plain one-sided distance bounds it: the skipping measure may
     // over-estimate where it ran out of budget.)
-    const double input_visible = std::min(loss.outside_distance, a.input_to_output);
+    const double input_visible = refine ? std::min(loss.outside_distance, a.input_to_output) : a.input_to_output;
     for (std::size_t f = 0; f < input.face_count(); ++f)
       if (loss.absorbed[f]) a.area_absorbed += face_area(input, f);
     a.deviation = std::max(output_moved, input_visible);

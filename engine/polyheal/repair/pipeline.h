@@ -104,7 +104,9 @@ struct Assessment {
   // first over the output faces that are not hole fills (`hole_fills`: they
   // add surface across an opening rather than move it; how far they are
   // from the input is fill_distance), the second over the input outside
-  // the output's volume. Input faces farther than max_deviation from
+  // the output's volume (measured apart only when the plain input -> output
+  // distance exceeds max_deviation; otherwise that plain distance, an upper
+  // bound, is reported). Input faces farther than max_deviation from
   // the output and inside its volume (the inside of interpenetrating parts,
   // inner walls, enclosed components) are absorbed: removed, not moved;
   // their area is reported and whole components of them count as dropped.

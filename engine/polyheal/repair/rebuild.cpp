@@ -1366,7 +1366,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   return result;
 }
 
-Loss measure_loss(const Soup& input, const Soup& written, double far) {
+Loss measure_loss(const Soup& input, const Soup& written, double far, bool outside) {
   Loss loss;
   const Soup welded = apply_weld(input, weld_identical_points(input.points));
   const Topology topo = analyze_topology(welded);
@@ -1415,7 +1415,8 @@ Loss measure_loss(const Soup& input, const Soup& written, double far) {
   }
   for (std::size_t c = 0; c < topo.components; ++c)
     if (!near[c]) ++(absorbed[c] ? loss.absorbed_components : loss.lost_components);
-  loss.outside_distance = detail::one_sided_distance_skipping(
+  if (outside)
+    loss.outside_distance = detail::one_sided_distance_skipping(
       input, written, 0.05 * far, [&](const Point3d& p) { return inside_output(p) > 0.5; });
   loss.lost_area_fraction = area > 0 ? lost_area / area : 0;
   return loss;

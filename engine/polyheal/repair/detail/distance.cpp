@@ -27,11 +27,12 @@ K::Point_3 point(const Point3d& p) { return K::Point_3(p[0], p[1], p[2]); }
 
 using Corners = std::array<Point3d, 3>;
 
-/// A triangle's corners in a canonical rotation (the smallest first), so
-/// that the same face in two files compares equal.
+/// A triangle's corners in a canonical order (sorted), so that the same
+/// face in two files compares equal whatever its rotation or orientation
+/// (distances do not see orientation; a reoriented face is not a change).
 Corners canonical(const Point3d& a, const Point3d& b, const Point3d& c) {
   Corners t{a, b, c};
-  std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+  std::sort(t.begin(), t.end());
   return t;
 }
 
