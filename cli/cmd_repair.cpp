@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <filesystem>
 #include <sstream>
 
 #include "certificate.h"
@@ -16,7 +17,7 @@ namespace polyheal::cli {
 namespace {
 
 struct RepairArgs : RepairFiles {
-  std::string steps = "all", weld, max_deviation = "1%", certificate, provenance;
+  std::string steps = "all", weld, max_deviation = "1%", certificate, provenance, for_tool, smesh;
   bool no_fill = false, drop_enclosed = false;
   RepairOptions options;
   double max_deviation_abs = 0, max_deviation_ratio = 0;
@@ -44,7 +45,8 @@ nlohmann::json parameters_json(const RepairArgs& a, const Outcome& o) {
           {"fill_holes", a.options.fill_holes},
           {"max_hole_edges", a.options.max_hole_edges},
           {"max_deviation", o.max_deviation},
-          {"drop_enclosed", a.drop_enclosed}};
+          {"drop_enclosed", a.drop_enclosed},
+          {"for", a.for_tool.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.for_tool)}};
 }
 
 nlohmann::json to_json(const RepairArgs& args, const Outcome& o) {
@@ -95,6 +97,7 @@ nlohmann::json to_json(const RepairArgs& args, const Outcome& o) {
             {"face_fraction", a.out.faces ? double(a.faces_kept) / double(a.out.faces) : 0.0},
             {"area_fraction_of_input", a.area_in > 0 ? a.area_kept / a.area_in : 0.0},
             {"area_ratio", a.area_in > 0 ? a.area_out / a.area_in : 0.0}}},
+          {"tetgen_smesh", args.smesh.empty() ? nlohmann::json(nullptr) : nlohmann::json(args.smesh)},
           {"seconds", {{"read", o.read_s}, {"repair", o.repair_s}, {"write_and_verify", o.write_s}}},
           {"peak_memory_mb", peak_memory_mb()}};
 }
@@ -129,10 +132,15 @@ void print_text(const RepairArgs& args, const Outcome& o) {
     std::printf("  dropped components: %zu (%zu inside the output's volume)\n", a.dropped_components,
                 a.absorbed_components);
   const std::vector<std::string> d = defects(a.out);
-  std::string verdict = a.certified ? "CERTIFIED CLEAN" : "DEFECTS REMAIN:";
+  std::string verdict = a.certified ? (args.options.for_tetgen ? "CERTIFIED CLEAN and TetGen-ready" : "CERTIFIED CLEAN")
+                                    : "DEFECTS REMAIN:";
+  if (!a.certified && args.options.for_tetgen && a.out.certified_clean())
+    verdict = "clean, but NOT TetGen-ready: " + std::to_string(a.out.sharp_folds.size()) + " sharp folds, " +
+              std::to_string(a.out.nearly_degenerate_faces.size()) + " nearly degenerate faces;";
   for (const std::string& x : d) verdict += " " + x + ";";
   for (const std::string& p : o.problems)
     if (a.certified) verdict += "; " + p;
+  if (!args.smesh.empty()) std::printf("  TetGen input: %s\n", args.smesh.c_str());
   std::printf("  => %s (%.2f s)\n", verdict.c_str(), o.read_s + o.repair_s + o.write_s);
 }
 
@@ -148,6 +156,7 @@ void run(RepairArgs& args, int& exit_code) {
     throw CLI::ValidationError("--steps", e.what());
   }
   parse_length("--weld", args.weld, args.options.weld, args.options.weld_ratio);
+  args.options.for_tetgen = args.for_tool == "tetgen";
   parse_length("--max-deviation", args.max_deviation, args.max_deviation_abs, args.max_deviation_ratio);
   if (!args.certificate.empty()) refuse_to_clobber(args.input, args.certificate, false);
   if (!args.provenance.empty()) refuse_to_clobber(args.input, args.provenance, false);
@@ -163,7 +172,18 @@ void run(RepairArgs& args, int& exit_code) {
       [&](const Soup& written) {
         progress.stage("assessing the written file");
         o.a = assess(input, written, o.max_deviation, args.options.for_tetgen, result.hole_fills);
-        if (!o.a.certified) o.problems.push_back("not certified");
+        if (!o.a.certified)
+          o.problems.push_back(args.options.for_tetgen && o.a.out.certified_clean()
+                                   ? "clean but not TetGen-ready: " + std::to_string(o.a.out.sharp_folds.size()) +
+                                         " sharp folds, " + std::to_string(o.a.out.nearly_degenerate_faces.size()) +
+                                         " nearly degenerate faces"
+                                   : std::string("not certified"));
+        if (args.options.for_tetgen) {
+          // The surface as written, in TetGen's own format beside it.
+          args.smesh = (std::filesystem::path(args.output).replace_extension(".smesh")).string();
+          refuse_to_clobber(args.input, args.smesh, false);
+          write_file_atomically(args.smesh, serialize_smesh(written), true);
+        }
         if (!o.a.within_deviation) {
           std::ostringstream s;
           s << "surface moved " << o.a.deviation << ", more than --max-deviation " << o.max_deviation;
@@ -228,6 +248,10 @@ void add_repair(CLI::App& app, int& exit_code) {
       ->default_str("1%");
   cmd->add_flag("--drop-enclosed", args->drop_enclosed,
                 "accept dropping components that lie inside the output's volume (inner parts) with exit 0");
+  cmd->add_option("--for", args->for_tool,
+                  "tetgen: also require TetGen's tolerances (no fold below 0.1 deg, no nearly collinear face), "
+                  "and write OUT.smesh for tetgen -p")
+      ->check(CLI::IsMember({"tetgen"}));
   cmd->add_option("--certificate", args->certificate,
                   "write a JSON certificate: input and output SHA-256, each check and its result, parameters");
   cmd->add_option("--provenance", args->provenance,

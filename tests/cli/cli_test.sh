@@ -223,5 +223,12 @@ cmp -s "$tmp/pt1.off" "$tmp/pt2.off" && passes=$((passes+1)) || { fails=$((fails
 expect 1 "a perturbed mesh is not TetGen-ready" -- "$bin" check --tetgen-ready "$tmp/pt1.off"
 expect 2 "perturb rejects an unknown kind" -- "$bin" perturb "$src/fixtures/torus.off" -o "$tmp/pt3.off" --kind noise
 expect 2 "perturb never writes over its input" -- "$bin" perturb "$tmp/pt1.off" -o "$tmp/pt1.off" --kind slivers --overwrite
+# repair --for tetgen
+expect 0 "repair --for tetgen removes what trips TetGen" -- "$bin" repair "$tmp/pt1.off" -o "$tmp/pt1_tg.off" --for tetgen
+grep_out "TetGen-ready" "$tmp/out" "repair --for tetgen verdict"
+expect 0 "its output is TetGen-ready" -- "$bin" check --tetgen-ready "$tmp/pt1_tg.off"
+[ -s "$tmp/pt1_tg.smesh" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: no .smesh written"; }
+expect 1 "without --for tetgen the same input stays as it is (caps are not defects)" -- "$bin" check --tetgen-ready "$tmp/pt1.off"
+expect 2 "repair --for rejects an unknown tool" -- "$bin" repair "$tmp/pt1.off" -o "$tmp/pt1_x.off" --for gmsh
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]

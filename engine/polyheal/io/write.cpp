@@ -39,6 +39,19 @@ void put_point(std::string& out, const Point3d& p) {
   put_double(out, p[2]);
 }
 
+/// One line per face: the corner count, then the 0-based indices (OFF and
+/// .smesh share it).
+void put_faces(std::string& out, const Soup& s) {
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    put_uint(out, s.face(f).size());
+    for (Index i : s.face(f)) {
+      out += ' ';
+      put_uint(out, i);
+    }
+    out += '\n';
+  }
+}
+
 std::string off(const Soup& s) {
   std::string out = "OFF\n";
   put_uint(out, s.points.size());
@@ -49,14 +62,27 @@ std::string off(const Soup& s) {
     put_point(out, p);
     out += '\n';
   }
-  for (std::size_t f = 0; f < s.face_count(); ++f) {
-    put_uint(out, s.face(f).size());
-    for (Index i : s.face(f)) {
-      out += ' ';
-      put_uint(out, i);
-    }
+  put_faces(out, s);
+  return out;
+}
+
+/// TetGen's .smesh (its own surface format, read by `tetgen -p`): part 1
+/// the nodes (0-based, shortest round-trip doubles), part 2 the facets,
+/// parts 3 and 4 no holes, no regions.
+std::string smesh(const Soup& s) {
+  std::string out = "# polyheal: surface for TetGen (tetgen -p)\n";
+  put_uint(out, s.points.size());
+  out += " 3 0 0\n";
+  for (std::size_t i = 0; i < s.points.size(); ++i) {
+    put_uint(out, i);
+    out += ' ';
+    put_point(out, s.points[i]);
     out += '\n';
   }
+  put_uint(out, s.face_count());
+  out += " 0\n";
+  put_faces(out, s);
+  out += "0\n0\n";
   return out;
 }
 
@@ -164,6 +190,8 @@ std::string ply(const Soup& s, bool ascii) {
 }
 
 }  // namespace
+
+std::string serialize_smesh(const Soup& soup) { return smesh(soup); }
 
 std::string serialize_soup(const Soup& soup, Format format, bool ascii, bool* rounded) {
   bool r = false;

@@ -30,6 +30,10 @@ struct WriteInfo {
 /// Serialises `soup` in `format` (no file system access).
 std::string serialize_soup(const Soup& soup, Format format, bool ascii, bool* rounded = nullptr);
 
+/// `soup` in TetGen's .smesh format (nodes, facets, no holes or regions),
+/// coordinates in shortest round-trip form: what `tetgen -p` reads.
+std::string serialize_smesh(const Soup& soup);
+
 /// Writes `soup` to `path` atomically (format from the extension). Throws
 /// OutputError when the target exists and overwriting was not allowed, or on
 /// an I/O failure; the target is then untouched.

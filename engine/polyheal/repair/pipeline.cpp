@@ -69,9 +69,12 @@ class Pipeline {
     const bool moved =
         wanted(kStepDeintersect) && !done() && !cur_.report.self_intersections.empty() && deintersect().accepted;
     if (wanted(kStepRegularize)) {
-      if (!done() && cur_.report.closed) regularize(cur_.soup, "regularize");
+      if (!done() && !cur_.report.certified_clean() && cur_.report.closed) regularize(cur_.soup, "regularize");
       if (moved && before_moves.report.closed) regularize(before_moves.soup, "regularize (without local moves)");
     }
+    // TetGen's tolerances (for_tetgen): nearly degenerate faces and sharp
+    // folds on a surface that is otherwise clean, before the grid is tried.
+    if (o_.for_tetgen && wanted(kStepDegenerate) && !done() && cur_.report.certified_clean()) tetgen_shapes();
     if (wanted(kStepRebuild) && !done()) rebuild();
     result_.soup = std::move(cur_.soup);
     r.seconds = seconds_since(t0);
@@ -200,6 +203,25 @@ class Pipeline {
                   {"flips", double(r.flips)}};
       s.outcome = std::to_string(r.before.zero_area) + " zero-area faces, " + std::to_string(r.after.zero_area) +
                   " left; " + std::to_string(r.collapses) + " collapses, " + std::to_string(r.flips) + " flips";
+      return std::move(res.soup);
+    });
+  }
+
+  void tetgen_shapes() {
+    stage("degenerate (TetGen tolerances)", [&](StageReport& s) {
+      DegenerateOptions d;
+      d.cap_angle = 179.9;  // far beyond TetGen's 1e-8 relative collinearity, so none is left
+      d.needle_angle = 0.1;
+      d.certify = false;
+      d.observer = o_.observer;
+      DegenerateResult res = remove_degenerate_faces(cur_.soup, d);
+      const DegenerateReport& r = res.report;
+      s.counts = {{"caps_before", double(r.before.caps)},   {"needles_before", double(r.before.needles)},
+                  {"caps_after", double(r.after.caps)},     {"needles_after", double(r.after.needles)},
+                  {"collapses", double(r.collapses)},       {"flips", double(r.flips)}};
+      s.outcome = std::to_string(r.before.caps + r.before.needles) + " faces beyond 179.9/0.1 degrees, " +
+                  std::to_string(r.after.caps + r.after.needles) + " left; " + std::to_string(r.collapses) +
+                  " collapses, " + std::to_string(r.flips) + " flips";
       return std::move(res.soup);
     });
   }
