@@ -30,6 +30,17 @@ tetgen_verdict() {
   if timeout 120 tetgen -pYQ "$work/tetgen_probe.off" >/dev/null 2>&1; then echo yes; else echo no; fi
 }
 
+# timed LIMIT OUT ERR CMD...: one run of CMD, stopped after LIMIT seconds,
+# stdout to OUT and stderr to ERR; sets code (its exit status), wall_s and
+# wall_kb (seconds and peak KiB from /usr/bin/time).
+timed() {
+  local limit=$1 out=$2 err=$3
+  shift 3
+  code=0
+  /usr/bin/time -f "%e %M" -o "$work/time.txt" timeout "$limit" "$@" >"$out" 2>"$err" || code=$?
+  read -r wall_s wall_kb < <(tail -n 1 "$work/time.txt")
+}
+
 # best_of CMD...: prints "seconds peakKiB" of the fastest of $runs runs, or
 # "fails 0" when the command exits with 2 or more (the peer cannot read it).
 best_of() {
@@ -131,10 +142,8 @@ if want deintersect; then
   for f in "${di_inputs[@]}"; do
     [ -f "$f" ] || continue
     name=$(basename "$f")
-    code=0
-    /usr/bin/time -f "%e %M" -o "$work/time.txt" timeout 1200 "$b/polyheal" deintersect --json --overwrite "$f" \
-      -o "$work/di_ours.off" > "$work/di.json" 2>"$work/di.err" || code=$?
-    read -r ours_s ours_kb < <(tail -n 1 "$work/time.txt")
+    timed 1200 "$work/di.json" "$work/di.err" "$b/polyheal" deintersect --json --overwrite "$f" -o "$work/di_ours.off"
+    ours_s=$wall_s; ours_kb=$wall_kb
     faces=$({ "$b/polyheal" check --json "$f" 2>/dev/null || true; } | sed -n 's/.*"faces": \([0-9]*\).*/\1/p' | head -1)
     if [ "$code" -ge 2 ]; then
       why=$(sed -n 's/.*is non-manifold: shared by.*/an edge with 3+ faces/p; s/.*repeats a vertex.*/a face repeating a vertex/p;
@@ -210,10 +219,8 @@ if want regularize; then
     [ -f "$f" ] || continue
     name=$(basename "$f")
     reg_count=$((reg_count + 1))
-    code=0
-    /usr/bin/time -f "%e %M" -o "$work/time.txt" timeout 1200 "$b/polyheal" regularize --json --overwrite "$f" \
-      -o "$work/reg_ours.off" > "$work/reg.json" 2>"$work/reg.err" || code=$?
-    read -r ours_s ours_kb < <(tail -n 1 "$work/time.txt")
+    timed 1200 "$work/reg.json" "$work/reg.err" "$b/polyheal" regularize --json --overwrite "$f" -o "$work/reg_ours.off"
+    ours_s=$wall_s; ours_kb=$wall_kb
     { "$b/polyheal" check --json "$f" 2>/dev/null || true; } > "$work/reg_in.json"
     faces=$(json_num faces "$work/reg_in.json")
     pairs=$(json_num self_intersecting_pairs "$work/reg_in.json")
@@ -230,12 +237,10 @@ if want regularize; then
       ours="$v | $out_faces | $kept | $ours_s s, $((ours_kb / 1024)) MB | $(tetgen_verdict "$work/reg_ours.off")"
     fi
     peer="crashed or timed out | | | |"
-    code=0
-    /usr/bin/time -f "%e %M" -o "$work/time.txt" timeout 1200 "$b/cgal_regularize_peer" "$f" "$work/reg_cgal.off" \
-      > "$work/peer.txt" 2>/dev/null || code=$?
+    timed 1200 "$work/peer.txt" /dev/null "$b/cgal_regularize_peer" "$f" "$work/reg_cgal.off"
     if [ "$code" -eq 0 ]; then
       read -r cg_s cg_faces cg_ok cg_still < "$work/peer.txt"
-      read -r cg_wall cg_kb < <(tail -n 1 "$work/time.txt")
+      cg_wall=$wall_s; cg_kb=$wall_kb
       cv=$(verdict "$work/reg_cgal.off")
       [ "$cv" = certified ] && reg_cgal=$((reg_cgal + 1))
       cg_vol=$(json_num signed_volume "$work/verdict.json")  # verdict() just checked this file
@@ -257,10 +262,8 @@ if want rebuild; then
     [ -f "$f" ] || continue
     name=$(basename "$f")
     rb_count=$((rb_count + 1))
-    code=0
-    /usr/bin/time -f "%e %M" -o "$work/time.txt" timeout 1200 "$b/polyheal" rebuild --json --overwrite "$f" \
-      -o "$work/rb_ours.off" > "$work/rb.json" 2>"$work/rb.err" || code=$?
-    read -r ours_s ours_kb < <(tail -n 1 "$work/time.txt")
+    timed 1200 "$work/rb.json" "$work/rb.err" "$b/polyheal" rebuild --json --overwrite "$f" -o "$work/rb_ours.off"
+    ours_s=$wall_s; ours_kb=$wall_kb
     faces=$(sed -n '/"input_mesh"/,/}/p' "$work/rb.json" | json_num faces /dev/stdin)
     diag=$(json_num diagonal "$work/rb.json")
     cell=$(json_num cell "$work/rb.json")
@@ -278,13 +281,12 @@ if want rebuild; then
     ours="$v | $out_faces | $(awk -v a="$io" -v b="$oi" -v d="$diag" 'BEGIN{printf "%.2g%% / %.2g%%", 100 * a / d, 100 * b / d}') | $ours_s s, $((ours_kb / 1024)) MB | $(tetgen_verdict "$work/rb_ours.off")"
     # alpha_wrap_3 at alpha = our cell (relative to the diagonal), offset alpha / 30 (CGAL's example)
     peer="crashed or timed out | | | |"
-    code=0
-    /usr/bin/time -f "%e %M" -o "$work/time.txt" timeout 1200 "$b/cgal_rebuild_peer" "$f" "$work/rb_cgal.off" "$rel" \
-      "$(awk -v r="$rel" 'BEGIN{printf "%.6g", r / 30}')" > "$work/peer.txt" 2>/dev/null || code=$?
+    timed 1200 "$work/peer.txt" /dev/null "$b/cgal_rebuild_peer" "$f" "$work/rb_cgal.off" "$rel" \
+      "$(awk -v r="$rel" 'BEGIN{printf "%.6g", r / 30}')"
     cg_wall=""
     if [ "$code" -eq 0 ]; then
       read -r cg_s cg_faces < "$work/peer.txt"
-      read -r cg_wall cg_kb < <(tail -n 1 "$work/time.txt")
+      cg_wall=$wall_s; cg_kb=$wall_kb
       cv=$(verdict "$work/rb_cgal.off")
       [ "$cv" = certified ] && rb_cgal=$((rb_cgal + 1))
       read -r cio coi _ < <("$b/polyheal_gen" distance "$f" "$work/rb_cgal.off" 2>/dev/null || echo "- - -")
@@ -309,10 +311,8 @@ if want repair; then
     [ -f "$f" ] || continue
     name=$(basename "$f")
     rp_count=$((rp_count + 1))
-    code=0
-    /usr/bin/time -f "%e %M" -o "$work/time.txt" timeout 1200 "$b/polyheal" repair --json --overwrite "$f" \
-      -o "$work/rp_ours.off" > "$work/rp.json" 2>"$work/rp.err" || code=$?
-    read -r ours_s ours_kb < <(tail -n 1 "$work/time.txt")
+    timed 1200 "$work/rp.json" "$work/rp.err" "$b/polyheal" repair --json --overwrite "$f" -o "$work/rp_ours.off"
+    ours_s=$wall_s; ours_kb=$wall_kb
     if [ "$code" -ge 2 ]; then
       rp_rows+="| $name | | error: $(head -c 100 "$work/rp.err") | | | | | | | | | | |"$'\n'
       continue
@@ -331,12 +331,10 @@ if want repair; then
     stages=$({ grep -o '"name": "[a-z ()]*"\|"accepted": [a-z]*' "$work/rp.json" || true; } | paste - - | awk -F'"' '$3 ~ /true/ {print $6}' | paste -sd, - )
     ours="$v | $code | ${stages:-none} | $out_faces | $(awk -v f="$kept_f" -v a="$kept_a" 'BEGIN{printf "%.0f%% / %.0f%%", 100 * f, 100 * a}') | $(awk -v h="$h" -v m="$moved_rel" 'BEGIN{printf "%.3g%% / %.3g%%", 100 * h, 100 * m}') | $ours_s s, $((ours_kb / 1024)) MB"
     peer="crashed or timed out | | | "
-    code=0
-    /usr/bin/time -f "%e %M" -o "$work/time.txt" timeout 300 "$b/cgal_repair_peer" "$f" "$work/rp_cgal.off" \
-      > "$work/peer.txt" 2>/dev/null || code=$?
+    timed 300 "$work/peer.txt" /dev/null "$b/cgal_repair_peer" "$f" "$work/rp_cgal.off"
     if [ "$code" -eq 0 ]; then
       read -r cg_s cg_faces < "$work/peer.txt"
-      read -r cg_wall cg_kb < <(tail -n 1 "$work/time.txt")
+      cg_wall=$wall_s; cg_kb=$wall_kb
       cv=$(verdict "$work/rp_cgal.off")
       [ "$cv" = certified ] && rp_cgal=$((rp_cgal + 1))
       read -r cio coi cdiag < <("$b/polyheal_gen" distance "$f" "$work/rp_cgal.off" 2>/dev/null || echo "- - -")
