@@ -70,13 +70,11 @@ void add_compare(CLI::App& app, int& exit_code) {
     const Soup b = read_soup(args->b);
     progress.stage("measuring");
     const Report ra = inspect(a);
-    double diag = 0;
-    for (int k = 0; k < 3; ++k) diag += (ra.bbox_max[k] - ra.bbox_min[k]) * (ra.bbox_max[k] - ra.bbox_min[k]);
-    diag = std::sqrt(diag);
+    const double diag = bbox_diagonal(ra);
     const bool bounded = args->max_abs > 0 || args->max_ratio > 0;
     const double bound = args->max_abs > 0 ? args->max_abs : args->max_ratio * diag;
     // Components count as dropped beyond the bound, or 1% of the diagonal without one.
-    const Assessment s = assess(a, b, bounded ? bound : 0.01 * diag, false);
+    const Assessment s = assess(a, ra, b, bounded ? bound : 0.01 * diag, false);
     const Side sa = side(ra, s.area_in), sb = side(s.out, s.area_out);
     const bool ok = s.certified && (!bounded || s.within_deviation);
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -76,6 +76,7 @@ nlohmann::json to_json(const RepairArgs& args, const Outcome& o) {
           {"input_mesh", {{"faces", o.report.faces_in}, {"defects", o.report.defects_in}, {"certified_clean", o.report.clean_in}}},
           {"stages", stages},
           {"output_mesh", checks_json(a.out)},
+          {"defects_after", defect_count(a.out, args.options.for_tetgen)},
           {"deviation",
            {{"surface_moved", a.deviation},
             {"hausdorff", a.hausdorff},
@@ -171,7 +172,7 @@ void run(RepairArgs& args, int& exit_code) {
       result.soup, args, progress, o.write_s,
       [&](const Soup& written) {
         progress.stage("assessing the written file");
-        o.a = assess(input, written, o.max_deviation, args.options.for_tetgen, result.hole_fills);
+        o.a = assess(input, result.input, written, o.max_deviation, args.options.for_tetgen, result.hole_fills);
         if (!o.a.certified)
           o.problems.push_back(args.options.for_tetgen && o.a.out.certified_clean()
                                    ? "clean but not TetGen-ready: " + std::to_string(o.a.out.sharp_folds.size()) +

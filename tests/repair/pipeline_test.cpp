@@ -24,7 +24,7 @@ Assessment written(const Soup& input, const RepairResult& r, const std::string& 
   const std::string p = test::scratch(name);
   write_soup(r.soup, p);
   if (tetgen) CHECK(test::tetgen_meshes(p, "tet_" + name));
-  return assess(input, read_soup(p), max_dev, false);
+  return assess(input, r.input, read_soup(p), max_dev, false);
 }
 
 bool ran(const RepairReport& r, const std::string& stage, bool accepted) {
@@ -86,7 +86,7 @@ TEST_CASE("repair: --steps limits the stages, what is left is reported, not hidd
   o.steps = parse_steps("clean,degenerate");
   const RepairResult r = repair(in, o);
   CHECK(r.report.stages.empty());  // nothing for those two to do
-  CHECK_FALSE(assess(in, r.soup, 1.0, false).certified);
+  CHECK_FALSE(assess(in, r.input, r.soup, 1.0, false).certified);
   CHECK(parse_steps("all") == kAllSteps);
   CHECK(parse_steps("rebuild,clean") == (kStepRebuild | kStepClean));
   CHECK_THROWS_AS(parse_steps("clean,polish"), std::invalid_argument);
@@ -97,11 +97,12 @@ TEST_CASE("assess: a dropped component is found, one inside the output counts as
                               {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
   const Soup inner = test::tetrahedron(0, 0, 0);      // inside big
   const Soup far = test::tetrahedron(10, 0, 0);       // outside
-  const Assessment enclosed = assess(test::concat(big, inner), big, 0.1, false);
+  const Soup big_inner = test::concat(big, inner), big_far = test::concat(big, far);
+  const Assessment enclosed = assess(big_inner, inspect(big_inner), big, 0.1, false);
   CHECK(enclosed.dropped_components == 1);
   CHECK(enclosed.absorbed_components == 1);
   CHECK(enclosed.within_deviation);  // removed, not moved
-  const Assessment lost = assess(test::concat(big, far), big, 0.1, false);
+  const Assessment lost = assess(big_far, inspect(big_far), big, 0.1, false);
   CHECK(lost.dropped_components == 1);
   CHECK(lost.absorbed_components == 0);
   CHECK_FALSE(lost.within_deviation);

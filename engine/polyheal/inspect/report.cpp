@@ -178,4 +178,10 @@ SurfaceTopology topology_of(const Report& r) {
   return t;
 }
 
+double bbox_diagonal(const Report& r) {
+  const double dx = r.bbox_max[0] - r.bbox_min[0], dy = r.bbox_max[1] - r.bbox_min[1],
+               dz = r.bbox_max[2] - r.bbox_min[2];
+  return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+
 }  // namespace polyheal

@@ -87,4 +87,8 @@ struct SurfaceTopology {
 /// the welded vertices, faces and edges).
 SurfaceTopology topology_of(const Report& report);
 
+/// Length of the diagonal of the report's bounding box (the scale the
+/// repairs' relative tolerances and reports refer to).
+double bbox_diagonal(const Report& report);
+
 }  // namespace polyheal

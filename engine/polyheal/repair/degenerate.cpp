@@ -297,9 +297,7 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   r.self_intersections_in = in.self_intersections.size();
   const Soup clean = preprocess(input, r.repeated_index_faces);
   r.topology_in = r.repeated_index_faces ? topology_of(inspect(clean, inspect_options(o))) : topology_of(in);
-  const double dx = in.bbox_max[0] - in.bbox_min[0], dy = in.bbox_max[1] - in.bbox_min[1],
-               dz = in.bbox_max[2] - in.bbox_min[2];
-  r.bbox_diagonal = std::sqrt(dx * dx + dy * dy + dz * dz);
+  r.bbox_diagonal = bbox_diagonal(in);
   r.tolerance = o.tolerance >= 0 ? o.tolerance : o.tolerance_ratio * r.bbox_diagonal;
   if (!clean.is_triangle_soup()) throw UnsupportedInput("not a triangle mesh (polygons with more than 3 corners)");
   Mesh mesh;

@@ -703,8 +703,7 @@ DeintersectResult remove_self_intersections(const Soup& input, const Deintersect
   r.vertices = mesh.number_of_vertices();
   r.degenerate_faces_in = in.degenerate_faces.size();
   r.topology_in = topology_of(in);
-  r.bbox_diagonal = std::sqrt(std::pow(in.bbox_max[0] - in.bbox_min[0], 2) + std::pow(in.bbox_max[1] - in.bbox_min[1], 2) +
-                              std::pow(in.bbox_max[2] - in.bbox_min[2], 2));
+  r.bbox_diagonal = bbox_diagonal(in);
   auto original = mesh.add_property_map<vertex_descriptor, Point3d>("v:polyheal_original").first;
   for (vertex_descriptor v : mesh.vertices()) original[v] = approx_point3d(mesh.point(v));
 

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 #include <cmath>
 #include <set>
 #include <sstream>
@@ -27,12 +28,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-double diagonal_of(const Report& r) {
-  double s = 0;
-  for (int k = 0; k < 3; ++k) s += (r.bbox_max[k] - r.bbox_min[k]) * (r.bbox_max[k] - r.bbox_min[k]);
-  return std::sqrt(s);
-}
-
 /// The surface the pipeline carries from stage to stage, with its exact
 /// inspection.
 struct State {
@@ -52,7 +47,8 @@ class Pipeline {
     cur_ = inspected(input_);
     r.faces_in = input_.face_count();
     r.defects_in = cur_.defects;
-    r.diagonal = diagonal_of(cur_.report);
+    r.diagonal = bbox_diagonal(cur_.report);
+    result_.input = cur_.report;
     if (done()) {
       r.clean_in = true;
       result_.soup = input_;
@@ -65,12 +61,14 @@ class Pipeline {
     // Self-intersections: local moves first; on a closed surface the union
     // (regularization) of what they left, and of the surface before them —
     // whichever certified result is closer to the input is kept.
-    const State before_moves = cur_;
-    const bool moved =
-        wanted(kStepDeintersect) && !done() && !cur_.report.self_intersections.empty() && deintersect().accepted;
+    std::optional<Soup> before_moves;  // the closed surface local moves started from
+    if (wanted(kStepDeintersect) && !done() && !cur_.report.self_intersections.empty()) {
+      if (cur_.report.closed) before_moves = cur_.soup;
+      if (!deintersect().accepted) before_moves.reset();
+    }
     if (wanted(kStepRegularize)) {
       if (!done() && !cur_.report.certified_clean() && cur_.report.closed) regularize(cur_.soup, "regularize");
-      if (moved && before_moves.report.closed) regularize(before_moves.soup, "regularize (without local moves)");
+      if (before_moves) regularize(*before_moves, "regularize (without local moves)");
     }
     // TetGen's tolerances (for_tetgen): nearly degenerate faces and sharp
     // folds on a surface that is otherwise clean, before the grid is tried.
@@ -101,8 +99,7 @@ class Pipeline {
 
   /// Runs one stage: `run()` returns the candidate surface (or throws
   /// UnsupportedInput: the stage refuses this surface). The candidate
-  /// replaces the current surface when it is certified or has fewer
-  /// defects.
+  /// replaces the current surface when it is better (see below).
   template <class Run>
   StageReport& stage(const char* name, Run run) {
     if (o_.observer) o_.observer->stage(name);
@@ -379,15 +376,14 @@ bool certified(const Report& r, bool for_tetgen) { return for_tetgen ? r.tetgen_
 
 RepairResult repair(const Soup& input, const RepairOptions& options) { return Pipeline(input, options).run(); }
 
-Assessment assess(const Soup& input, const Soup& written, double max_deviation, bool for_tetgen,
+Assessment assess(const Soup& input, const Report& in, const Soup& written, double max_deviation, bool for_tetgen,
                   const std::vector<std::array<Point3d, 3>>& hole_fills) {
   Assessment a;
   a.out = inspect(written);
   a.certified = certified(a.out, for_tetgen);
-  const Report in = inspect(input);  // topology only would do; the full pass keeps one code path
   a.components_in = in.components;
   a.components_out = a.out.components;
-  a.diagonal = diagonal_of(in);
+  a.diagonal = bbox_diagonal(in);
   a.max_deviation = max_deviation;
   a.error_bound = 1e-4 * a.diagonal;
   if (written.face_count() && input.face_count()) {

@@ -81,6 +81,7 @@ struct RepairReport {
 struct RepairResult {
   Soup soup;
   RepairReport report;
+  Report input;  // the exact inspection of the input (assess() takes it)
   /// Corners of the triangles the clean stage added to fill holes, as they
   /// are in `soup` (fills a later stage changed are not listed): assess()
   /// reports them apart from moved surface.
@@ -126,7 +127,9 @@ struct Assessment {
   bool within_deviation = true;            // deviation <= max_deviation
 };
 
-Assessment assess(const Soup& input, const Soup& written, double max_deviation, bool for_tetgen,
+/// `input_report`: inspect(input), which the caller has already made.
+Assessment assess(const Soup& input, const Report& input_report, const Soup& written, double max_deviation,
+                  bool for_tetgen,
                   const std::vector<std::array<Point3d, 3>>& hole_fills = {});
 
 }  // namespace polyheal

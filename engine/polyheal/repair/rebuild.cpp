@@ -1432,11 +1432,7 @@ void certify_rebuild(const Soup& input, const Soup& written, RebuildReport& r) {
   r.degenerate = out.degenerate_faces.size();
   r.components_out = out.components;
   r.certified = r.volume && out.certified_clean();
-  if (r.diagonal == 0) {
-    r.diagonal = std::sqrt((out.bbox_max[0] - out.bbox_min[0]) * (out.bbox_max[0] - out.bbox_min[0]) +
-                           (out.bbox_max[1] - out.bbox_min[1]) * (out.bbox_max[1] - out.bbox_min[1]) +
-                           (out.bbox_max[2] - out.bbox_min[2]) * (out.bbox_max[2] - out.bbox_min[2]));
-  }
+  if (r.diagonal == 0) r.diagonal = bbox_diagonal(out);
   r.hausdorff_error_bound = (r.cell > 0 ? 0.05 * r.cell : 1e-3 * r.diagonal);
   if (written.face_count()) {
     const std::array<double, 2> d = detail::one_sided_distances(input, written, r.hausdorff_error_bound);

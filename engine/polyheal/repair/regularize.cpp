@@ -1121,8 +1121,7 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
     std::sort(fs.begin(), fs.end());
     r.intersecting_faces_in = std::size_t(std::unique(fs.begin(), fs.end()) - fs.begin());
   }
-  r.bbox_diagonal = std::sqrt(std::pow(in.bbox_max[0] - in.bbox_min[0], 2) + std::pow(in.bbox_max[1] - in.bbox_min[1], 2) +
-                              std::pow(in.bbox_max[2] - in.bbox_min[2], 2));
+  r.bbox_diagonal = bbox_diagonal(in);
   r.seconds_detect = seconds_since(t0);
 
   t0 = std::chrono::steady_clock::now();
