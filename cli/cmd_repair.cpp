@@ -17,7 +17,7 @@ namespace polyheal::cli {
 namespace {
 
 struct RepairArgs : RepairFiles {
-  std::string steps = "all", weld, max_deviation = "1%", certificate, provenance, for_tool, smesh;
+  std::string steps = "all", weld, t_junction, max_deviation = "1%", certificate, provenance, for_tool, smesh;
   bool no_fill = false, drop_enclosed = false;
   RepairOptions options;
   double max_deviation_abs = 0, max_deviation_ratio = 0;
@@ -42,6 +42,7 @@ std::vector<std::string> step_names(unsigned mask) {
 nlohmann::json parameters_json(const RepairArgs& a, const Outcome& o) {
   return {{"steps", step_names(a.options.steps)},
           {"weld", a.options.weld > 0 ? a.options.weld : a.options.weld_ratio * o.report.diagonal},
+          {"t_junction", a.options.t_junction > 0 ? a.options.t_junction : a.options.t_junction_ratio * o.report.diagonal},
           {"fill_holes", a.options.fill_holes},
           {"max_hole_edges", a.options.max_hole_edges},
           {"max_deviation", o.max_deviation},
@@ -157,6 +158,7 @@ void run(RepairArgs& args, int& exit_code) {
     throw CLI::ValidationError("--steps", e.what());
   }
   parse_length("--weld", args.weld, args.options.weld, args.options.weld_ratio);
+  parse_length("--t-junction", args.t_junction, args.options.t_junction, args.options.t_junction_ratio);
   args.options.for_tetgen = args.for_tool == "tetgen";
   parse_length("--max-deviation", args.max_deviation, args.max_deviation_abs, args.max_deviation_ratio);
   if (!args.certificate.empty()) refuse_to_clobber(args.input, args.certificate, false);
@@ -225,8 +227,9 @@ void add_repair(CLI::App& app, int& exit_code) {
       "Stages, each run only when the exact inspection says it is needed and kept only\n"
       "when it reduces the defects:\n"
       "  clean        weld identical (and, with --weld, near) vertices; drop repeated-index\n"
-      "               and duplicate faces (opposite copies cancel); orient; split non-manifold\n"
-      "               points; stitch borders; fill holes. Moves no vertex.\n"
+      "               and duplicate faces (opposite copies cancel); close T-junction cracks;\n"
+      "               orient; split non-manifold points; stitch borders; fill holes.\n"
+      "               Moves no vertex.\n"
       "  degenerate   exactly zero-area faces (Botsch & Kobbelt), nothing else\n"
       "  deintersect  self-intersections by small local moves (Yamakawa & Shimada)\n"
       "  regularize   closed surfaces local repair could not finish: the union's boundary\n"
@@ -241,6 +244,10 @@ void add_repair(CLI::App& app, int& exit_code) {
                   "comma-separated stages to allow: clean, degenerate, deintersect, regularize, rebuild, or all")
       ->default_str("all");
   cmd->add_option("--weld", args->weld, "also weld vertices closer than D (model units, or P% of the bbox diagonal)");
+  cmd->add_option("--t-junction", args->t_junction,
+                  "close T-junction cracks: split a boundary edge at a boundary vertex within D of it "
+                  "(model units, or P% of the bbox diagonal)")
+      ->default_str("1e-7%");
   cmd->add_flag("--no-fill-holes", args->no_fill, "leave boundary loops open");
   cmd->add_option("--max-hole-edges", args->options.max_hole_edges, "fill only loops of at most N edges (0: all)")
       ->default_val(0);

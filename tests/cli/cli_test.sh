@@ -184,6 +184,11 @@ grep_out "unknown step 'polish'" "$tmp/err" "unknown step named"
 expect 2 "repair never writes over its input" -- "$bin" repair "$tmp/rp_tube.off" -o "$tmp/rp_tube.off" --overwrite
 expect 2 "repair malformed input" -- "$bin" repair "$tmp/bad.off" -o "$tmp/rp_bad.off"
 [ ! -e "$tmp/rp_bad.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: repair wrote output on error"; }
+# T-junction cracks (a CAD STL: seams where one side has a vertex the other lacks) close
+# in the clean stage without moving the surface: no local moves, no grid.
+expect 0 "repair closes the T-junction cracks of a CAD STL" -- "$bin" repair "$src/fixtures/angle_block.stl" -o "$tmp/rp_ab.off"
+grep_out "T-junctions closed" "$tmp/out" "repair reports the T-junctions"
+expect 0 "the closed CAD STL is within 1e-7% of the input" -- "$bin" compare "$src/fixtures/angle_block.stl" "$tmp/rp_ab.off" --max-deviation 1e-7%
 expect 0 "repair help" -- "$bin" repair --help
 grep_out "regularize" "$tmp/out" "repair help lists the stages"
 expect 0 "compare: a certified repair within bounds" -- "$bin" compare "$src/fixtures/tube_edge3.0.off" "$tmp/rp_tube.off" --max-deviation 1%

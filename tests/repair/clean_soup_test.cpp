@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 
 #include "polyheal/inspect/report.h"
@@ -145,4 +146,78 @@ TEST_CASE("clean_soup: two cubes touching at a corner: the pinch point is split,
   CHECK(r.report.split_vertices >= 1);
   CHECK(r.soup.face_count() == 24);
   CHECK(oriented_faces(r.soup) == oriented_faces(two));
+}
+
+namespace {
+
+/// The welded unit cube with its top face re-triangulated through a vertex
+/// m on the edge (0,0,1)-(1,0,1) that the front face does not have: the
+/// crack a CAD export leaves at a T-junction (a boundary loop of zero
+/// width: edges 4-m-5 on one side, 4-5 on the other).
+Soup t_junction_cube(const Point3d& m) {
+  Soup s;
+  s.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, m};
+  const int t[13][3] = {{0, 2, 1}, {0, 3, 2}, {4, 8, 6}, {8, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                        {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+  for (const auto& f : t) s.add_triangle(Index(f[0]), Index(f[1]), Index(f[2]));
+  return s;
+}
+
+double area(const Soup& s) {
+  double a = 0;
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    const Point3d &p = s.points[s.face(f)[0]], &q = s.points[s.face(f)[1]], &r = s.points[s.face(f)[2]];
+    const double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]}, v[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+    const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    a += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  }
+  return a;
+}
+
+}  // namespace
+
+TEST_CASE("clean_soup: a T-junction crack closes by splitting the face across it, no coordinate moved",
+          "[clean_soup]") {
+  CleanSoupOptions o;
+  o.fill_holes = false;  // the crack must close by itself, not by a fill
+
+  SECTION("a vertex exactly on the edge (tolerance 0)") {
+    const Soup in = t_junction_cube({0.5, 0, 1});
+    CHECK_FALSE(inspect(in).closed);
+    const CleanSoupResult r = clean_soup(in, o);
+    CHECK(r.report.t_junctions == 1);
+    CHECK(r.report.holes == 0);
+    CHECK(r.soup.face_count() == 14);  // the front face 0-5-4 became 0-5-m, 0-m-4
+    const Report rep = inspect(r.soup);
+    CHECK(rep.certified_clean());
+    CHECK(rep.signed_volume > 0);
+    CHECK(area(r.soup) == Approx(6.0).epsilon(1e-15));
+    // Every point of the output is an input point, bit for bit.
+    for (const Point3d& p : r.soup.points) CHECK(std::count(in.points.begin(), in.points.end(), p) == 1);
+  }
+
+  SECTION("a vertex 1e-12 off the edge: closed within a tolerance above that, left open below") {
+    const Soup in = t_junction_cube({0.5, 1e-12, 1});  // inside the top face, just off its front edge
+    o.t_junction = 1e-13;
+    const CleanSoupResult strict = clean_soup(in, o);
+    CHECK(strict.report.t_junctions == 0);
+    CHECK_FALSE(inspect(strict.soup).closed);
+    o.t_junction = 1e-9;
+    const CleanSoupResult r = clean_soup(in, o);
+    CHECK(r.report.t_junctions == 1);
+    CHECK(r.report.near_vertices_welded == 0);  // m is far from every corner
+    CHECK(inspect(r.soup).certified_clean());
+  }
+
+  SECTION("copies of a corner closer than the tolerance weld: a crack of zero length") {
+    Soup in = stl_cube();
+    for (std::size_t f = 6; f < 12; ++f)
+      for (Index i : in.face(f)) in.points[i][1] += 1e-13;
+    CHECK_FALSE(inspect(clean_soup(in, o).soup).closed);  // tolerance 0: identical points only
+    o.t_junction = 1e-9;
+    const CleanSoupResult r = clean_soup(in, o);
+    CHECK(r.report.near_vertices_welded > 0);
+    CHECK(r.report.max_weld_move <= 2e-13);
+    CHECK(inspect(r.soup).certified_clean());
+  }
 }

@@ -8,10 +8,12 @@
 #include <CGAL/Polygon_mesh_processing/stitch_borders.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/box_intersection_d.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <unordered_map>
 
@@ -101,6 +103,117 @@ bool same_cycle(const std::vector<P3>& pts, const std::vector<std::size_t>& p, c
   return false;
 }
 
+
+/// T-junctions: a boundary vertex v within `tol` of the interior of a
+/// boundary edge x-y (of face x-y-c) splits that face into x-v-c, v-y-c (in
+/// order along the edge when several vertices lie on it). Decided exactly:
+/// rational arithmetic on the input doubles, v strictly between x and y in
+/// projection, farther than tol from both, and |(v-x) x (y-x)|^2 <=
+/// tol^2 |y-x|^2 (within tol of the line). The split faces span
+/// the original within tol; no coordinate changes. Faces are split one
+/// boundary edge per pass; passes repeat until nothing splits.
+std::size_t split_t_junctions(const std::vector<Point3d>& pts, std::vector<Tri>& tris,
+                              std::vector<std::int64_t>& source, double tol) {
+  using Q = CGAL::Exact_rational;
+  using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::size_t, CGAL::Box_intersection_d::ID_EXPLICIT>;
+  const Q tol2 = Q(tol) * Q(tol);
+  std::size_t inserted = 0;
+  for (int pass = 0; pass < 16; ++pass) {
+    std::unordered_map<std::uint64_t, std::pair<std::size_t, int>> once;  // edge -> (face, corner) while used once
+    std::unordered_map<std::uint64_t, int> uses;
+    for (std::size_t f = 0; f < tris.size(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const std::uint64_t e = edge_key(tris[f][k], tris[f][(k + 1) % 3]);
+        if (++uses[e] == 1) once[e] = {f, k};
+      }
+    std::vector<std::pair<std::size_t, int>> border;  // (face, corner): edge corner -> corner+1
+    std::vector<Index> border_vertices;
+    for (const auto& [e, n] : uses)
+      if (n == 1) {
+        border.push_back(once[e]);
+        border_vertices.push_back(Index(e >> 32));
+        border_vertices.push_back(Index(e & 0xFFFFFFFFu));
+      }
+    if (border.empty()) break;
+    std::sort(border.begin(), border.end());
+    std::sort(border_vertices.begin(), border_vertices.end());
+    border_vertices.erase(std::unique(border_vertices.begin(), border_vertices.end()), border_vertices.end());
+
+    // Broad phase: edge boxes grown by tol (rounded outward) against points.
+    auto down = [&](double x) { return std::nextafter(x - tol, -std::numeric_limits<double>::infinity()); };
+    auto up = [&](double x) { return std::nextafter(x + tol, std::numeric_limits<double>::infinity()); };
+    std::vector<Box> edge_boxes, point_boxes;
+    for (std::size_t i = 0; i < border.size(); ++i) {
+      const Tri& t = tris[border[i].first];
+      const Point3d &a = pts[t[border[i].second]], &b = pts[t[(border[i].second + 1) % 3]];
+      double lo[3], hi[3];
+      for (int c = 0; c < 3; ++c) {
+        lo[c] = down(std::min(a[c], b[c]));
+        hi[c] = up(std::max(a[c], b[c]));
+      }
+      edge_boxes.emplace_back(lo, hi, i);
+    }
+    for (Index v : border_vertices) {
+      double p[3] = {pts[v][0], pts[v][1], pts[v][2]};
+      point_boxes.emplace_back(p, p, std::size_t(v));
+    }
+    std::vector<std::vector<Index>> on_edge(border.size());
+    CGAL::box_intersection_d(edge_boxes.begin(), edge_boxes.end(), point_boxes.begin(), point_boxes.end(),
+                             [&](const Box& eb, const Box& pb) {
+                               const Tri& t = tris[border[eb.info()].first];
+                               const Index v = Index(pb.info());
+                               if (v == t[0] || v == t[1] || v == t[2]) return;
+                               const int k = border[eb.info()].second;
+                               const Point3d &x = pts[t[k]], &y = pts[t[(k + 1) % 3]], &p = pts[v];
+                               Q d[3], w[3];
+                               for (int c = 0; c < 3; ++c) {
+                                 d[c] = Q(y[c]) - Q(x[c]);
+                                 w[c] = Q(p[c]) - Q(x[c]);
+                               }
+                               const Q along = w[0] * d[0] + w[1] * d[1] + w[2] * d[2];
+                               const Q len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                               if (!(along > 0) || !(along < len2)) return;
+                               // Within tol of an end: the same point (the near weld merges those).
+                               const Q to_x = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+                               const Q to_y = to_x - 2 * along + len2;  // |w - d|^2
+                               if (to_x <= tol2 || to_y <= tol2) return;
+                               const Q cx = w[1] * d[2] - w[2] * d[1], cy = w[2] * d[0] - w[0] * d[2],
+                                       cz = w[0] * d[1] - w[1] * d[0];
+                               if (cx * cx + cy * cy + cz * cz <= tol2 * len2) on_edge[eb.info()].push_back(v);
+                             });
+
+    std::vector<char> split(tris.size(), 0);
+    std::size_t before = inserted;
+    for (std::size_t i = 0; i < border.size(); ++i) {
+      if (on_edge[i].empty() || split[border[i].first]) continue;
+      const std::size_t f = border[i].first;
+      split[f] = 1;
+      const int k = border[i].second;
+      const Tri t = tris[f];
+      const Index x = t[k], y = t[(k + 1) % 3], c = t[(k + 2) % 3];
+      std::vector<std::pair<Q, Index>> order;
+      for (Index v : on_edge[i]) {
+        Q along = 0;
+        for (int j = 0; j < 3; ++j) along += (Q(pts[v][j]) - Q(pts[x][j])) * (Q(pts[y][j]) - Q(pts[x][j]));
+        order.emplace_back(along, v);
+      }
+      std::sort(order.begin(), order.end(), [](const auto& l, const auto& r) { return l.first < r.first; });
+      std::vector<Index> chain{x};
+      for (const auto& [q, v] : order)
+        if (v != chain.back()) chain.push_back(v);
+      chain.push_back(y);
+      inserted += chain.size() - 2;
+      tris[f] = Tri{chain[0], chain[1], c};
+      for (std::size_t j = 1; j + 1 < chain.size(); ++j) {
+        tris.push_back(Tri{chain[j], chain[j + 1], c});
+        source.push_back(source[f]);
+      }
+    }
+    if (inserted == before) break;
+  }
+  return inserted;
+}
+
 }  // namespace
 
 CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
@@ -112,7 +225,10 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
   const Weld weld = weld_identical_points(input.points);
   r.identical_vertices_welded = weld.merged;
   std::vector<Index> rep = weld.representative;
-  if (o.weld > 0) rep = weld_near(input.points, weld.representative, o.weld, r.near_vertices_welded, r.max_weld_move);
+  // Points closer than the T-junction tolerance are one point: the crack
+  // edge between them has zero length.
+  const double near = std::max(o.weld, o.t_junction);
+  if (near > 0) rep = weld_near(input.points, weld.representative, near, r.near_vertices_welded, r.max_weld_move);
 
   // Fan polygons; drop faces that repeat an index.
   std::vector<Tri> tris;
@@ -188,6 +304,8 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
     tris.resize(w);
     source.resize(w);
   }
+
+  r.t_junctions = split_t_junctions(input.points, tris, source, o.t_junction);
 
   // Compact the points to those faces use.
   std::vector<P3> pts;

@@ -7,8 +7,13 @@
 // generalised winding number; copies of one orientation keep one); orient
 // each component consistently (CGAL's orient_polygon_soup, which also splits
 // non-manifold vertices and edges); stitch matching borders; fill holes
-// (CGAL's triangulate_hole: no new vertex). Faces keep their input corners
-// bit for bit; hole fills are new faces on existing vertices.
+// (CGAL's triangulate_hole: no new vertex). Before stitching, T-junction
+// cracks close: a boundary vertex within `t_junction` of a boundary edge's
+// interior splits that edge's face at the vertex (the crack a CAD export
+// leaves where one side of a seam has the edge a-b and the other a-v-b),
+// and vertices closer than `t_junction` weld (a crack of zero length).
+// Faces keep their input corners bit for bit; hole fills and T-junction
+// splits are new faces on existing vertices.
 #pragma once
 
 #include <cstddef>
@@ -21,6 +26,8 @@ namespace polyheal {
 
 struct CleanSoupOptions {
   double weld = 0;                // model units: also merge vertices closer than this (0: identical only)
+  double t_junction = 0;          // model units: split a boundary edge at a boundary vertex this close
+                                  // to its interior, and weld vertices this close (0: exactly on it only)
   bool orient = true;             // orient components consistently
   bool fill_holes = true;         // triangulate every boundary loop
   std::size_t max_hole_edges = 0; // leave loops with more edges open (0: no limit)
@@ -31,6 +38,7 @@ struct CleanSoupReport {
   std::size_t identical_vertices_welded = 0, near_vertices_welded = 0;
   double max_weld_move = 0;                  // model units: largest move of a near-welded vertex
   std::size_t repeated_index_faces = 0;      // dropped
+  std::size_t t_junctions = 0;               // boundary vertices inserted into a boundary edge
   std::size_t duplicate_faces_dropped = 0;   // same-orientation copies beyond the first
   std::size_t cancelled_faces = 0;           // opposite copies removed in pairs
   std::size_t reoriented_faces = 0;

@@ -151,6 +151,7 @@ class Pipeline {
     return stage(fill ? "clean" : "clean (no fill)", [&](StageReport& s) {
       CleanSoupOptions co;
       co.weld = o_.weld > 0 ? o_.weld : o_.weld_ratio * result_.report.diagonal;
+      co.t_junction = o_.t_junction > 0 ? o_.t_junction : o_.t_junction_ratio * result_.report.diagonal;
       co.fill_holes = fill;
       co.max_hole_edges = o_.max_hole_edges;
       CleanSoupResult c = clean_soup(cur_.soup, co);
@@ -164,6 +165,7 @@ class Pipeline {
       s.counts = {{"welded_identical", double(r.identical_vertices_welded)},
                   {"welded_near", double(r.near_vertices_welded)},
                   {"repeated_index_faces", double(r.repeated_index_faces)},
+                  {"t_junctions", double(r.t_junctions)},
                   {"duplicate_faces_dropped", double(r.duplicate_faces_dropped)},
                   {"cancelled_faces", double(r.cancelled_faces)},
                   {"reoriented_faces", double(r.reoriented_faces)},
@@ -176,7 +178,7 @@ class Pipeline {
       if (r.near_vertices_welded) s.max_displacement = r.max_weld_move;
       std::ostringstream line;
       line << r.repeated_index_faces << " repeated-index and " << r.duplicate_faces_dropped + r.cancelled_faces
-           << " duplicate faces dropped, " << r.reoriented_faces << " reoriented, " << r.stitched_edges
+           << " duplicate faces dropped, " << r.t_junctions << " T-junctions closed, " << r.reoriented_faces << " reoriented, " << r.stitched_edges
            << " edges stitched, " << r.holes_filled << " of " << r.holes << " holes filled";
       if (r.near_vertices_welded) line << ", " << r.near_vertices_welded << " near vertices welded";
       s.outcome = line.str();

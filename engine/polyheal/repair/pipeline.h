@@ -3,8 +3,8 @@
 // An outline of stages, each run only when the exact inspection of the
 // current surface says it is needed, and kept only when it helps:
 //   1. clean       soup-level defects (clean_soup.h): weld, drop repeated-index
-//                  and duplicate faces, orient, split non-manifold points,
-//                  stitch borders, fill holes. Moves no coordinate (unless
+//                  and duplicate faces, close T-junction cracks, orient,
+//                  split non-manifold points, stitch borders, fill holes. Moves no coordinate (unless
 //                  a near weld is asked for).
 //   2. degenerate  exactly zero-area faces (Botsch & Kobbelt, degenerate.h),
 //                  with cap/needle thresholds at their limits: only faces
@@ -52,6 +52,8 @@ struct RepairOptions {
   unsigned steps = kAllSteps;
   double weld = 0;                  // model units: also weld vertices closer than this (0: identical only)
   double weld_ratio = 0;            // the same as a fraction of the bbox diagonal (used when weld is 0)
+  double t_junction = 0;            // model units: close T-junction cracks this wide (clean_soup.h)
+  double t_junction_ratio = 1e-9;   // the same as a fraction of the bbox diagonal (used when t_junction is 0)
   bool fill_holes = true;
   std::size_t max_hole_edges = 0;   // leave longer boundary loops open (0: fill all)
   bool for_tetgen = false;          // also remove what trips TetGen's tolerances (Report::tetgen_ready)
