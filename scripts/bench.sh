@@ -20,14 +20,17 @@ only=${BENCH_ONLY:-all}
 want() { [ "$only" = all ] || [[ ",$only," == *",$1,"* ]]; }
 corpus="$root/../shared/corpus"
 json_num() { sed -n "s/.*\"$1\": \([-0-9.e+]*\).*/\1/p" "$2" | head -1; }
-# tetgen_verdict FILE: "yes"/"no" when `tetgen -pYQ` (2 minutes at most) meshes
-# the file / does not; "—" when the file is not closed (TetGen needs a volume).
+# tetgen_verdict FILE [SWITCHES]: "yes"/"no" when `tetgen SWITCHES` (default
+# -pYQ; 2 minutes at most: "timeout") meshes the file / does not; "—" when
+# the file is not closed (TetGen needs a volume).
 tetgen_verdict() {
-  local closed
+  local closed code=0
   closed=$({ "$b/polyheal" check --json "$1" 2>/dev/null || true; } | sed -n 's/.*"closed": \(true\|false\).*/\1/p' | head -1)
   [ "$closed" = true ] || { echo "—"; return; }
-  cp "$1" "$work/tetgen_probe.off"
-  if timeout 120 tetgen -pYQ "$work/tetgen_probe.off" >/dev/null 2>&1; then echo yes; else echo no; fi
+  local probe="$work/tetgen_probe.${1##*.}"
+  cp "$1" "$probe"
+  timeout 120 tetgen "${2:--pYQ}" "$probe" >/dev/null 2>&1 || code=$?
+  case $code in 0) echo yes ;; 124) echo "timeout" ;; *) echo no ;; esac
 }
 
 # timed LIMIT OUT ERR CMD...: one run of CMD, stopped after LIMIT seconds,
@@ -301,6 +304,7 @@ fi
 
 # --- polyheal repair vs a CGAL PMP repair pipeline (one run each) ---
 rp_rows=""; rp_count=0; rp_ours=0; rp_cgal=0; rp_exit0=0; rp_h=""; rp_moved=""; rp_hc=""
+rp_tg=0; rp_tg_for=0; rp_tg_cgal=0
 if want repair; then
   rp_inputs=()
   for f in tube_edge3.0.off tube_edge4.0.off tube_edge2.42_offset-0.15.off knot_tube_r1.2.off dirty_box.obj cad_cylinder.off; do
@@ -314,7 +318,7 @@ if want repair; then
     timed 1200 "$work/rp.json" "$work/rp.err" "$b/polyheal" repair --json --overwrite "$f" -o "$work/rp_ours.off"
     ours_s=$wall_s; ours_kb=$wall_kb
     if [ "$code" -ge 2 ]; then
-      rp_rows+="| $name | | error: $(head -c 100 "$work/rp.err") | | | | | | | | | | |"$'\n'
+      rp_rows+="| $name | | error: $(head -c 100 "$work/rp.err") | | | | | | | | | | | | |"$'\n'
       continue
     fi
     [ "$code" -eq 0 ] && rp_exit0=$((rp_exit0 + 1))
@@ -329,8 +333,18 @@ if want repair; then
     moved_rel=$(awk -v m="$moved" -v d="$diag" -v h="$h" 'BEGIN{print (d > 0 ? m / d : (h == 0 ? 0 : -1))}')
     rp_h+="$h"$'\n'; rp_moved+="$moved_rel"$'\n'
     stages=$({ grep -o '"name": "[a-z ()]*"\|"accepted": [a-z]*' "$work/rp.json" || true; } | paste - - | awk -F'"' '$3 ~ /true/ {print $6}' | paste -sd, - )
-    ours="$v | $code | ${stages:-none} | $out_faces | $(awk -v f="$kept_f" -v a="$kept_a" 'BEGIN{printf "%.0f%% / %.0f%%", 100 * f, 100 * a}') | $(awk -v h="$h" -v m="$moved_rel" 'BEGIN{printf "%.3g%% / %.3g%%", 100 * h, 100 * m}') | $ours_s s, $((ours_kb / 1024)) MB"
-    peer="crashed or timed out | | | "
+    # TetGen on the plain output; where it refuses, on the --for tetgen output's .smesh.
+    tg=$(tetgen_verdict "$work/rp_ours.off" -pQ); tg_for=""
+    [ "$tg" = yes ] && rp_tg=$((rp_tg + 1))
+    if [ "$tg" = no ] || [ "$tg" = timeout ]; then
+      timed 1200 /dev/null /dev/null "$b/polyheal" repair --for tetgen --overwrite "$f" -o "$work/rp_tg.off"
+      tg_for=$(if [ -f "$work/rp_tg.off" ]; then tetgen_verdict "$work/rp_tg.off" -pQ; else echo "no output"; fi)
+      rm -f "$work/rp_tg.off" "$work/rp_tg.smesh"
+      [ "$tg_for" = yes ] && rp_tg_for=$((rp_tg_for + 1))
+      tg="$tg; --for tetgen: $tg_for"
+    fi
+    ours="$v | $code | ${stages:-none} | $out_faces | $(awk -v f="$kept_f" -v a="$kept_a" 'BEGIN{printf "%.0f%% / %.0f%%", 100 * f, 100 * a}') | $(awk -v h="$h" -v m="$moved_rel" 'BEGIN{printf "%.3g%% / %.3g%%", 100 * h, 100 * m}') | $tg | $ours_s s, $((ours_kb / 1024)) MB"
+    peer="crashed or timed out | | | | "
     timed 300 "$work/peer.txt" /dev/null "$b/cgal_repair_peer" "$f" "$work/rp_cgal.off"
     if [ "$code" -eq 0 ]; then
       read -r cg_s cg_faces < "$work/peer.txt"
@@ -340,7 +354,9 @@ if want repair; then
       read -r cio coi cdiag < <("$b/polyheal_gen" distance "$f" "$work/rp_cgal.off" 2>/dev/null || echo "- - -")
       ch=$(awk -v a="$cio" -v c="$coi" -v d="$cdiag" 'BEGIN{ if (d + 0 > 0 && a != "-" && a >= 0 && c >= 0) printf "%.4g", (a > c ? a : c) / d; else print "-" }')
       [ "$ch" != "-" ] && rp_hc+="$ch"$'\n'
-      peer="$cv | $cg_faces | $(awk -v h="$ch" 'BEGIN{ if (h == "-") print "—"; else printf "%.3g%%", 100 * h}') | $cg_wall s, $((cg_kb / 1024)) MB"
+      ctg=$(tetgen_verdict "$work/rp_cgal.off" -pQ)
+      [ "$ctg" = yes ] && rp_tg_cgal=$((rp_tg_cgal + 1))
+      peer="$cv | $cg_faces | $(awk -v h="$ch" 'BEGIN{ if (h == "-") print "—"; else printf "%.3g%%", 100 * h}') | $ctg | $cg_wall s, $((cg_kb / 1024)) MB"
     fi
     rp_rows+="| $name | $faces | $ours | $peer |"$'\n'
     echo "$name: polyheal repair $ours_s s ($v); CGAL pipeline ${cg_wall:-?} s" >&2
@@ -549,11 +565,15 @@ the diagonal, no component dropped). "stages": those whose result was kept.
 "kept": output faces that are input faces exactly / input area they keep. "H / moved":
 symmetric Hausdorff distance to the input / surface moved (hole fills and input
 enclosed by the output excluded; see README), % of the diagonal. CGAL's H: the same
-measure (`polyheal_gen distance`). Time: the whole process (read, repair, write, read
-back, assess) for polyheal; the peer's wall time with I/O. One run each.
+measure (`polyheal_gen distance`). "TetGen": whether Debian's `tetgen -pQ` (its default
+tolerances; 2 minutes at most) tetrahedralizes the written surface (—: not closed);
+where it refuses polyheal's, the verdict on the output of `polyheal repair --for tetgen`
+follows. Time: the whole
+process (read, repair, write, read back, assess) for polyheal; the peer's wall time
+with I/O. One run each.
 
-| input | faces | polyheal verdict | exit | stages | faces out | kept faces / area | H / moved | polyheal time | CGAL verdict | faces out | H | CGAL time |
-| --- | ---: | --- | ---: | --- | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: |
+| input | faces | polyheal verdict | exit | stages | faces out | kept faces / area | H / moved | TetGen | polyheal time | CGAL verdict | faces out | H | TetGen | CGAL time |
+| --- | ---: | --- | ---: | --- | ---: | ---: | ---: | --- | ---: | --- | ---: | ---: | --- | ---: |
 TAIL
   printf "%s" "$rp_rows"
   cat <<TAIL
@@ -561,7 +581,8 @@ TAIL
 Inputs: $rp_count. Certified: polyheal $rp_ours, CGAL pipeline $rp_cgal. polyheal exit 0
 (certified and within bounds): $rp_exit0. Median Hausdorff: polyheal $(printf "%s" "$rp_h" | median)
 (surface moved $(printf "%s" "$rp_moved" | awk '$1 >= 0' | median)), CGAL pipeline $(printf "%s" "$rp_hc" | median) over the
-outputs it wrote.
+outputs it wrote. TetGen \`-pQ\` accepts: polyheal $rp_tg (plus $rp_tg_for more with
+\`--for tetgen\`), CGAL pipeline $rp_tg_cgal.
 
 Targets (issue 7): 100% certified; median Hausdorff under 0.1% of the bbox diagonal.
 

@@ -208,3 +208,60 @@ TEST_CASE("degenerate: collapses never join two pinch copies' edges (the file's 
   CHECK(topology_of(inspect(out)) == before);
   CHECK(result.report.topology_out == result.report.topology_in);
 }
+
+TEST_CASE("degenerate with a fold angle: a spike folded onto its neighbours is collapsed (repair --for tetgen)",
+          "[repair]") {
+  // The unit cube with its top face as a 4 x 4 grid; the grid vertex at
+  // (0.5, 0.5) is pushed across the edge (0.5, 0.25)-(0.75, 0.5) of its
+  // star and 1e-6 above the top: the face over that edge turns over onto
+  // its neighbour (folded at ~0 degrees; TetGen: "nearly self-intersecting
+  // facets"), with no exact self-intersection and no bad angle.
+  Soup s;
+  auto at = [&](double x, double y, double z) {
+    s.points.push_back({x, y, z});
+    return Index(s.points.size() - 1);
+  };
+  Index top[5][5];
+  for (int i = 0; i <= 4; ++i)
+    for (int j = 0; j <= 4; ++j) top[i][j] = at(i / 4.0, j / 4.0, 1.0);
+  s.points[top[2][2]] = {2.7 / 4.0, 1.3 / 4.0, 1.0 + 1e-6};
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) {  // outward (+z): counter-clockwise seen from above
+      s.add_triangle(top[i][j], top[i + 1][j], top[i + 1][j + 1]);
+      s.add_triangle(top[i][j], top[i + 1][j + 1], top[i][j + 1]);
+    }
+  // The other five sides, fanned from the top's border to the bottom square.
+  const Index b00 = at(0, 0, 0), b10 = at(1, 0, 0), b11 = at(1, 1, 0), b01 = at(0, 1, 0);
+  s.add_triangle(b00, b11, b10);
+  s.add_triangle(b00, b01, b11);
+  for (int k = 0; k < 4; ++k) {
+    s.add_triangle(top[k + 1][0], top[k][0], k < 2 ? b00 : b10);     // y = 0
+    s.add_triangle(top[4][k + 1], top[4][k], k < 2 ? b10 : b11);     // x = 1
+    s.add_triangle(top[3 - k][4], top[4 - k][4], k < 2 ? b11 : b01); // y = 1
+    s.add_triangle(top[0][3 - k], top[0][4 - k], k < 2 ? b01 : b00); // x = 0
+  }
+  s.add_triangle(top[2][0], b00, b10);
+  s.add_triangle(top[4][2], b10, b11);
+  s.add_triangle(top[2][4], b11, b01);
+  s.add_triangle(top[0][2], b01, b00);
+  const Report in = inspect(s);
+  REQUIRE(in.certified_clean());     // exactly clean ...
+  REQUIRE_FALSE(in.sharp_folds.empty());  // ... but not for TetGen
+
+  DegenerateOptions o;
+  o.cap_angle = 179.9;
+  o.needle_angle = 0.1;
+  o.certify = false;
+  const Soup plain = remove_degenerate_faces(s, o).soup;
+  CHECK(inspect(plain).sharp_folds.size() == in.sharp_folds.size());  // folds are not bad shapes
+
+  o.fold_angle = 0.1;
+  const DegenerateResult r = remove_degenerate_faces(s, o);
+  const Report out = inspect(r.soup);
+  CHECK(out.certified_clean());
+  CHECK(out.sharp_folds.empty());
+  CHECK(out.tetgen_ready());
+  CHECK(r.report.collapses >= 1);
+  CHECK(topology_of(out) == topology_of(in));
+  CHECK(detail::hausdorff_distance(s, r.soup, 1e-7) < 1e-5);  // the bump was 1e-6 high
+}

@@ -248,6 +248,7 @@ class Pipeline {
     d.cap_angle = o.cap_angle;
     d.needle_angle = o.needle_angle;
     d.tolerance = r.tolerance;
+    d.fold_angle = o.fold_angle;
     return d;
   }
 

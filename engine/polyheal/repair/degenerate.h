@@ -52,6 +52,10 @@ struct DegenerateOptions {
   bool global_slices = false;    // the paper's global slices instead of local ones
   bool interleave = true;        // decimate along each slice right after it
   bool certify = true;           // certify the rounded result (callers that certify the written file say false)
+  /// Degrees; > 0: faces folded onto a neighbour below this angle are bad as
+  /// well and no operation makes such a fold (repair --for tetgen: TetGen's
+  /// 0.1 degrees). Not part of the paper.
+  double fold_angle = 0;
   Observer* observer = nullptr;
 };
 

@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "polyheal/mesh/errors.h"
+#include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/weld.h"
 #include "polyheal/repair/clean_soup.h"
 #include "polyheal/repair/degenerate.h"
@@ -36,6 +37,52 @@ struct State {
   std::size_t defects = 0;
   double hausdorff = 0;  // to the input
 };
+
+/// The surface without its closed components that are no larger than
+/// `size` (bounding-box diagonal) and hold a face TetGen's tolerances stop
+/// on (a sharp fold or a nearly degenerate face): the flat tetrahedra the
+/// grid can leave in a thin gap, which no collapse can fix (every edge of a
+/// tetrahedron fails the link condition). `dropped` counts them.
+Soup without_tiny_flagged_components(const Soup& s, const Report& r, double size, std::size_t& dropped) {
+  dropped = 0;
+  const Weld weld = weld_identical_points(s.points);
+  Soup welded;
+  welded.points = s.points;
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    std::vector<Index> v;
+    for (Index i : s.face(f)) v.push_back(weld.representative[i]);
+    welded.add_face(v.begin(), v.end());
+  }
+  const Topology t = analyze_topology(welded);
+  std::vector<char> flagged(t.components, 0), open(t.components, 0);
+  for (const FacePair& p : r.sharp_folds) flagged[t.face_component[p.first]] = 1;
+  for (std::size_t f : r.nearly_degenerate_faces) flagged[t.face_component[f]] = 1;
+  for (const Edge& e : t.boundary_edges) open[t.face_component[e.uses.front().face]] = 1;
+  std::vector<std::array<double, 6>> box(t.components, {HUGE_VAL, HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, -HUGE_VAL});
+  for (std::size_t f = 0; f < s.face_count(); ++f)
+    for (Index i : s.face(f))
+      for (int c = 0; c < 3; ++c) {
+        box[t.face_component[f]][c] = std::min(box[t.face_component[f]][c], s.points[i][c]);
+        box[t.face_component[f]][c + 3] = std::max(box[t.face_component[f]][c + 3], s.points[i][c]);
+      }
+  std::vector<char> drop(t.components, 0);
+  for (std::size_t c = 0; c < t.components; ++c) {
+    const double dx = box[c][3] - box[c][0], dy = box[c][4] - box[c][1], dz = box[c][5] - box[c][2];
+    drop[c] = flagged[c] && !open[c] && std::sqrt(dx * dx + dy * dy + dz * dz) <= size;
+    dropped += drop[c];
+  }
+  if (!dropped) return s;
+  Soup out;
+  out.points = s.points;
+  for (std::size_t f = 0; f < s.face_count(); ++f)
+    if (!drop[t.face_component[f]]) {
+      const FaceView v = s.face(f);
+      out.add_face(v.begin(), v.end());
+      if (!s.face_group.empty()) out.face_group.push_back(s.face_group[f]);
+    }
+  out.group_names = s.group_names;
+  return out;
+}
 
 class Pipeline {
  public:
@@ -73,7 +120,13 @@ class Pipeline {
     // TetGen's tolerances (for_tetgen): nearly degenerate faces and sharp
     // folds on a surface that is otherwise clean, before the grid is tried.
     if (o_.for_tetgen && wanted(kStepDegenerate) && !done() && cur_.report.certified_clean()) tetgen_shapes();
-    if (wanted(kStepRebuild) && !done()) rebuild();
+    if (wanted(kStepRebuild) && !done()) {
+      const double cell = rebuild();
+      // The grid's feature placement can fold faces below TetGen's angle;
+      // the grid surface is a cell from the input already, and its spikes
+      // are about a cell long: collapses may move it that far again.
+      if (o_.for_tetgen && wanted(kStepDegenerate) && !done() && cur_.report.certified_clean()) tetgen_shapes(cell);
+    }
     result_.soup = std::move(cur_.soup);
     r.seconds = seconds_since(t0);
     return std::move(result_);
@@ -118,19 +171,23 @@ class Pipeline {
       // Better: certified where the current surface is not; when both are,
       // of the same topology (a union may merge or open up what local moves
       // kept apart) and closer to the input; else fewer defects.
+      // An empty result is never better: it drops every component (a sheet
+      // of opposite copies cancels to nothing in the clean stage).
+      const bool empty = next.soup.face_count() == 0;
       const bool both_ok = next_ok && done();
-      const bool better = both_ok ? topology_of(next.report) == topology_of(cur_.report) &&
-                                        next.hausdorff + bound < cur_.hausdorff
-                                  : next_ok || next.defects < cur_.defects;
+      const bool better = !empty && (both_ok ? topology_of(next.report) == topology_of(cur_.report) &&
+                                                   next.hausdorff + bound < cur_.hausdorff
+                                             : next_ok || next.defects < cur_.defects);
       if (better) {
         s.accepted = true;
         cur_ = std::move(next);
         if (!pending_fills_.empty()) result_.hole_fills = std::move(pending_fills_);
       } else {
         s.outcome += (s.outcome.empty() ? "" : "; ") + std::string("not kept: ") +
-                     (both_ok ? "another topology than, or farther from the input than, the current surface"
-                                        : std::to_string(next.defects) + " defects after, " +
-                                              std::to_string(cur_.defects) + " before");
+                     (empty     ? std::string("no face left")
+                      : both_ok ? "another topology than, or farther from the input than, the current surface"
+                                : std::to_string(next.defects) + " defects after, " + std::to_string(cur_.defects) +
+                                      " before");
       }
     } catch (const UnsupportedInput& e) {
       s.outcome = std::string("refused: ") + e.what();
@@ -206,21 +263,33 @@ class Pipeline {
     });
   }
 
-  void tetgen_shapes() {
+  /// `tolerance`: how far the operations may move the surface (model units;
+  /// negative: the degenerate engine's default, 1e-3 of the diagonal).
+  void tetgen_shapes(double tolerance = -1) {
     stage("degenerate (TetGen tolerances)", [&](StageReport& s) {
       DegenerateOptions d;
+      d.tolerance = tolerance;
+      std::size_t dropped = 0;
+      const Soup from = without_tiny_flagged_components(
+          cur_.soup, cur_.report, tolerance >= 0 ? tolerance : d.tolerance_ratio * result_.report.diagonal, dropped);
       d.cap_angle = 179.9;  // far beyond TetGen's 1e-8 relative collinearity, so none is left
       d.needle_angle = 0.1;
+      d.fold_angle = InspectOptions{}.tetgen_fold_angle;  // spikes folded onto a neighbour: collapsed
       d.certify = false;
       d.observer = o_.observer;
-      DegenerateResult res = remove_degenerate_faces(cur_.soup, d);
+      DegenerateResult res = remove_degenerate_faces(from, d);
       const DegenerateReport& r = res.report;
       s.counts = {{"caps_before", double(r.before.caps)},   {"needles_before", double(r.before.needles)},
                   {"caps_after", double(r.after.caps)},     {"needles_after", double(r.after.needles)},
-                  {"collapses", double(r.collapses)},       {"flips", double(r.flips)}};
-      s.outcome = std::to_string(r.before.caps + r.before.needles) + " faces beyond 179.9/0.1 degrees, " +
-                  std::to_string(r.after.caps + r.after.needles) + " left; " + std::to_string(r.collapses) +
-                  " collapses, " + std::to_string(r.flips) + " flips";
+                  {"collapses", double(r.collapses)},       {"flips", double(r.flips)},
+                  {"sharp_folds_before", double(cur_.report.sharp_folds.size())},
+                  {"tiny_components_removed", double(dropped)}};
+      s.outcome = std::to_string(r.before.caps + r.before.needles) + " faces beyond 179.9/0.1 degrees and " +
+                  std::to_string(cur_.report.sharp_folds.size()) + " sharp folds; " +
+                  std::to_string(r.after.caps + r.after.needles) + " faces beyond left; " +
+                  std::to_string(r.collapses) + " collapses, " + std::to_string(r.flips) + " flips";
+      if (dropped)
+        s.outcome += "; " + std::to_string(dropped) + " closed components within the tolerance, folded flat, removed";
       return std::move(res.soup);
     });
   }
@@ -264,10 +333,12 @@ class Pipeline {
     });
   }
 
-  void rebuild() {
+  /// Returns the grid's cell size (0 when the stage was refused).
+  double rebuild() {
     // From the input, not the current surface: earlier stages may have
     // closed a sheet by filling its boundary (a flat double layer), which
     // the overlay grid would take for a volume.
+    double cell = 0;
     stage("rebuild", [&](StageReport& s) {
       RebuildOptions ro;
       ro.certify = false;
@@ -275,6 +346,7 @@ class Pipeline {
       ro.observer = o_.observer;
       RebuildResult res = polyheal::rebuild(input_, ro);
       const RebuildReport& r = res.report;
+      cell = r.cell;
       s.counts = {{"cell", r.cell},
                   {"boundary_cells", double(r.boundary_cells)},
                   {"sheet_facets", double(r.sheet_facets)},
@@ -287,6 +359,7 @@ class Pipeline {
       s.outcome = line.str();
       return std::move(res.soup);
     });
+    return cell;
   }
 
   const Soup& input_;

@@ -17,6 +17,10 @@
 //                  output triangle lies on the input surface.
 //   5. rebuild     the last resort for anything else (Hu et al., rebuild.h):
 //                  an overlay-grid volume around the input, within a cell.
+// With for_tetgen, a clean surface that TetGen's tolerances would still stop
+// (nearly degenerate faces, sharp folds) goes through the degenerate engine
+// at 179.9/0.1 degrees with folds counted as bad, before the rebuild and
+// again on the rebuild's result. A result with no face left is never kept.
 // The caller writes the result and assesses the written file (assess()):
 // certification, Hausdorff distance, dropped components, provenance.
 #pragma once

@@ -47,7 +47,7 @@ struct ShapeDecimator::Impl {
   LocalIndex& index;
   const SurfaceDistance& input;
   DecimationOptions o;
-  double cos_cap, cos_needle, tol2;
+  double cos_cap, cos_needle, cos_fold, tol2;
   DecimationStats stats;
   std::unordered_map<std::uint32_t, std::vector<Point3d>> attached;  // removed vertices, by nearest face
 
@@ -84,6 +84,7 @@ struct ShapeDecimator::Impl {
         if (vertex_identity(identity, v) != static_cast<std::uint32_t>(v) || (pinned && (*pinned)[v]))
           copies[vertex_identity(identity, v)].push_back(v);
     cos_needle = cos_degrees(o.needle_angle);
+    cos_fold = cos_degrees(o.fold_angle);
     // Sampling can miss the farthest point by a little: decide at 70% of the
     // tolerance; the report states the Hausdorff distance actually measured.
     tol2 = 0.49 * o.tolerance * o.tolerance;
@@ -104,7 +105,44 @@ struct ShapeDecimator::Impl {
   double quality_of(const Triple& t) const {
     return quality(approx(t[0]), approx(t[1]), approx(t[2]));
   }
-  bool is_bad(face_descriptor f) const { return classify_face(mesh, f, cos_cap, cos_needle) != Shape::fine; }
+  bool is_bad(face_descriptor f) const {
+    return classify_face(mesh, f, cos_cap, cos_needle) != Shape::fine || (o.fold_angle > 0 && is_folded(f));
+  }
+
+  /// Faces (a, b, c) and (b, a, d) folded onto each other below fold_angle
+  /// (exact, on the vertices' doubles: those are what TetGen reads).
+  bool folded(const Triple& t, vertex_descriptor d) const {
+    return fold_angle_less(approx(t[0]), approx(t[1]), approx(t[2]), approx(d), cos_fold);
+  }
+  bool is_folded(face_descriptor f) const {
+    for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh.halfedge(f), mesh)) {
+      const halfedge_descriptor o = mesh.opposite(h);
+      if (mesh.is_border(o)) continue;
+      if (folded({mesh.source(h), mesh.target(h), mesh.target(mesh.next(h))}, mesh.target(mesh.next(o)))) return true;
+    }
+    return false;
+  }
+
+  /// Would a proposed triangle fold onto its neighbour after the operation
+  /// (another proposed triangle, or a face the operation keeps)?
+  bool creates_fold(const Plan& plan) const {
+    for (const Triple& t : plan.proposed)
+      for (int k = 0; k < 3; ++k) {
+        const vertex_descriptor a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
+        std::optional<vertex_descriptor> d;
+        for (const Triple& u : plan.proposed)
+          for (int j = 0; j < 3 && !d; ++j)
+            if (u[j] == b && u[(j + 1) % 3] == a) d = u[(j + 2) % 3];
+        if (!d) {
+          const auto [h, found] = CGAL::halfedge(b, a, mesh);
+          if (!found || mesh.is_border(h)) continue;
+          if (std::find(plan.replaced.begin(), plan.replaced.end(), mesh.face(h)) != plan.replaced.end()) continue;
+          d = mesh.target(mesh.next(h));
+        }
+        if (*d != c && folded({a, b, c}, *d)) return true;
+      }
+    return false;
+  }
 
   Kernel::Vector_3 normal(const Triple& t) const {
     return CGAL::cross_product(mesh.point(t[1]) - mesh.point(t[0]), mesh.point(t[2]) - mesh.point(t[0]));
@@ -132,10 +170,13 @@ struct ShapeDecimator::Impl {
       bad_before += is_bad(f);
     }
     // A flip must raise the worst quality it replaces (so flips cannot
-    // cycle); a collapse removes a vertex, so fewer bad faces also count.
-    const bool better = plan.simplify ? bad_after == 0 && bad_before == 0
-                                      : worst > before || (!plan.flip && bad_after < bad_before);
+    // cycle); a collapse removes a vertex, so fewer bad faces also count
+    // (and for flips when folds count: no flip creates one, so the number
+    // of bad faces strictly falls and flips cannot cycle either).
+    const bool fewer = bad_after < bad_before && (!plan.flip || o.fold_angle > 0);
+    const bool better = plan.simplify ? bad_after == 0 && bad_before == 0 : worst > before || fewer;
     if (!better) return false;
+    if (o.fold_angle > 0 && creates_fold(plan)) return false;
     plan.worst = worst;
     return true;  // the costlier tolerance and intersection tests: choose(), best first
   }
@@ -196,10 +237,34 @@ struct ShapeDecimator::Impl {
       });
       if (!ok) return false;
     }
+    // A displaced point may be covered by a face the operation keeps (a
+    // fold's spike lies on the face it is folded onto).
+    std::optional<std::vector<Triple>> kept;
     for_each_displaced(plan, [&](const Point3d& p) {
-      if (ok && nearest(plan.proposed, p).second > tol2) ok = false;
+      if (!ok || nearest(plan.proposed, p).second <= tol2) return;
+      if (!kept) kept = corners_of(surrounding(plan));
+      if (nearest(*kept, p).second > tol2) ok = false;
     });
     return ok;
+  }
+
+  /// The faces around an operation that it keeps: those sharing a vertex
+  /// with a replaced face.
+  std::vector<face_descriptor> surrounding(const Plan& plan) const {
+    std::vector<face_descriptor> out;
+    for (face_descriptor r : plan.replaced)
+      for (vertex_descriptor v : CGAL::vertices_around_face(mesh.halfedge(r), mesh))
+        for (face_descriptor f : CGAL::faces_around_target(mesh.halfedge(v), mesh))
+          if (f != Mesh::null_face() && std::find(plan.replaced.begin(), plan.replaced.end(), f) == plan.replaced.end())
+            out.push_back(f);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+  }
+  std::vector<Triple> corners_of(const std::vector<face_descriptor>& faces) const {
+    std::vector<Triple> out;
+    for (face_descriptor f : faces) out.push_back(corners(f));
+    return out;
   }
 
   /// Points of triangle t on a barycentric grid of `steps` (corners included).
@@ -334,6 +399,14 @@ struct ShapeDecimator::Impl {
     std::sort(order.begin(), order.end(), [&](int a, int b) { return len(a) < len(b); });
     std::vector<Plan> candidates;
     Plan plan;
+    if (o.fold_angle > 0 && is_folded(f)) {  // a fold: every edge, every way
+      for (int k = 0; k < 3; ++k) {
+        if (plan_collapse(hs[k], plan)) candidates.push_back(plan);
+        if (plan_collapse(mesh.opposite(hs[k]), plan)) candidates.push_back(plan);
+        if (plan_flip(hs[k], plan)) candidates.push_back(plan);
+      }
+      return choose(candidates, best);
+    }
     for (int k : {order[0], order[1]}) {  // collapse the short edges, either way
       if (plan_collapse(hs[k], plan)) candidates.push_back(plan);
       if (plan_collapse(mesh.opposite(hs[k]), plan)) candidates.push_back(plan);
@@ -359,6 +432,7 @@ struct ShapeDecimator::Impl {
   std::vector<face_descriptor> apply(const Plan& plan) {
     std::vector<Point3d> displaced;
     for_each_displaced(plan, [&](const Point3d& p) { displaced.push_back(p); });
+    const std::vector<face_descriptor> around = surrounding(plan);  // kept: their descriptors stay valid
     for (face_descriptor f : plan.replaced) {
       attached.erase(static_cast<std::uint32_t>(f));
       index.remove(f);
@@ -379,7 +453,10 @@ struct ShapeDecimator::Impl {
       ++stats.collapses;
     }
     index.update(changed);
-    attach(displaced, changed);
+    std::vector<face_descriptor> cover = changed;
+    for (face_descriptor f : around)
+      if (!mesh.is_removed(f)) cover.push_back(f);
+    attach(displaced, cover);
     return changed;
   }
 

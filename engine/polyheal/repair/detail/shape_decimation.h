@@ -24,7 +24,11 @@
 //     Kobbelt, Campagna & Seidel's decimation framework, the paper's [11]);
 //     sampling decides at 70% of the tolerance, and the pipeline reports the
 //     Hausdorff distance measured on the result;
-// and it strictly raises the worst angle quality of the faces it replaces.
+// and it strictly raises the worst angle quality of the faces it replaces
+// (or, for a collapse — or with fold_angle, a flip —, leaves fewer bad faces).
+// With fold_angle, no new triangle folds onto a neighbour (new or kept)
+// below it, and a folded face gets every collapse and flip of its edges as
+// candidates: a fold is usually a spike vertex, gone with a collapse.
 // Among the valid operations for a bad face the one leaving the best worst
 // triangle wins; bad faces are treated worst first.
 #pragma once
@@ -47,6 +51,10 @@ struct DecimationOptions {
   double cap_angle = 175.0;    // degrees
   double needle_angle = 5.0;   // degrees
   double tolerance = 0.0;      // model units: distance to the input surface
+  /// Degrees; > 0: a face folded onto a neighbour below this angle is bad
+  /// too, and no operation may fold two faces that far (TetGen's "nearly
+  /// self-intersecting facets", 0.1 degrees by default).
+  double fold_angle = 0.0;
 };
 
 struct DecimationStats {
