@@ -36,13 +36,20 @@ nlohmann::json pairs_json(const std::vector<FacePair>& pairs) {
   return a;
 }
 
+nlohmann::json near_edges_json(const std::vector<VertexNearEdge>& near) {
+  auto a = nlohmann::json::array();
+  for (const VertexNearEdge& v : near) a.push_back({{"vertex", v.vertex}, {"edge", {v.a, v.b}}});
+  return a;
+}
+
 nlohmann::json to_json(const CheckArgs& args, const Report& r, double read_s, double total_s) {
   using nlohmann::json;
   json j = {
       {"schema", "polyheal.check/1"},
       {"file", args.file},
       {"certified_clean", r.certified_clean()},
-      {"tetgen_ready", r.tetgen_ready()},
+      {"tetgen_ready", r.vertices_near_edges_checked || !r.certified_clean() ? json(r.tetgen_ready())
+                                                                             : json(nullptr)},  // null: not decided
       {"counts",
        {{"vertices", r.vertices},
         {"faces", r.faces},
@@ -70,6 +77,8 @@ nlohmann::json to_json(const CheckArgs& args, const Report& r, double read_s, do
       {"tetgen",
        {{"sharp_folds", r.sharp_folds.size()},
         {"nearly_degenerate_faces", r.nearly_degenerate_faces.size()},
+        {"vertices_near_edges",
+         r.vertices_near_edges_checked ? json(r.vertices_near_edges.size()) : json(nullptr)},  // null: not looked for
         {"fold_angle", args.inspect.tetgen_fold_angle},
         {"epsilon", args.inspect.tetgen_epsilon}}},
       {"shape",
@@ -93,7 +102,8 @@ nlohmann::json to_json(const CheckArgs& args, const Report& r, double read_s, do
                   {"misoriented_edges", edges_json(r.misoriented_edges)},
                   {"duplicate_faces", r.duplicate_faces},
                   {"sharp_folds", pairs_json(r.sharp_folds)},
-                  {"nearly_degenerate_faces", r.nearly_degenerate_faces}};
+                  {"nearly_degenerate_faces", r.nearly_degenerate_faces},
+                  {"vertices_near_edges", near_edges_json(r.vertices_near_edges)}};
   return j;
 }
 
@@ -119,8 +129,11 @@ void print_text(const CheckArgs& args, const Report& r, double total_s) {
   std::printf("  exact: %zu degenerate faces, %zu caps (>%g deg), %zu needles (<%g deg), %zu self-intersecting pairs\n",
               r.degenerate_faces.size(), r.caps.size(), args.inspect.cap_angle, r.needles.size(),
               args.inspect.needle_angle, r.self_intersections.size());
-  std::printf("  tetgen tolerances: %zu sharp folds (<%g deg), %zu nearly degenerate faces (eps %g)\n",
-              r.sharp_folds.size(), args.inspect.tetgen_fold_angle, r.nearly_degenerate_faces.size(),
+  const std::string near = r.vertices_near_edges_checked ? std::to_string(r.vertices_near_edges.size())
+                                                          : std::string("(not looked for: --tetgen-ready)");
+  std::printf("  tetgen tolerances: %zu sharp folds (<%g deg), %zu nearly degenerate faces, %s vertices nearly on an "
+              "edge (eps %g)\n",
+              r.sharp_folds.size(), args.inspect.tetgen_fold_angle, r.nearly_degenerate_faces.size(), near.c_str(),
               args.inspect.tetgen_epsilon);
   if (r.closed && r.oriented) std::printf("  signed volume %.17g\n", r.signed_volume);
   if (args.list) {
@@ -142,6 +155,11 @@ void print_text(const CheckArgs& args, const Report& r, double total_s) {
     print_list<std::array<std::size_t, 2>>("duplicate faces", r.duplicate_faces, dup);
     print_list<FacePair>("sharp folds", r.sharp_folds, pair);
     print_list<std::size_t>("nearly degenerate faces", r.nearly_degenerate_faces, num);
+    print_list<VertexNearEdge>("vertices nearly on an edge (vertex:edge)", r.vertices_near_edges,
+                               [](const VertexNearEdge& v) {
+                                 return std::to_string(v.vertex) + ":(" + std::to_string(v.a) + "," +
+                                        std::to_string(v.b) + ")";
+                               });
   }
   const bool ok = args.tetgen_ready ? r.tetgen_ready() : r.certified_clean();
   std::printf("  => %s (%.3f s)\n",
@@ -214,6 +232,7 @@ std::vector<std::string> confirm_certificate(const CheckArgs& args, const Report
                                                           c["output"]["sha256"].get<std::string>());
   const nlohmann::json now = checks_json(r);
   for (auto it = c["checks"].begin(); it != c["checks"].end(); ++it) {
+    if (it.value().is_null()) continue;  // not decided when the certificate was written
     if (!now.contains(it.key())) mismatches.push_back("unknown check '" + it.key() + "'");
     else if (now[it.key()] != it.value())
       mismatches.push_back(it.key() + " is " + now[it.key()].dump() + ", certificate says " + it.value().dump());
@@ -246,7 +265,7 @@ void add_check(CLI::App& app, int& exit_code) {
   cmd->add_flag("--list", args->list, "name the offending faces, edges, vertices and pairs");
   cmd->add_flag("--tetgen-ready", args->tetgen_ready,
                 "also require what TetGen's tolerances need (no fold below --fold-angle, no nearly degenerate "
-                "face); exit 1 otherwise");
+                "face, no vertex nearly on an edge it is not on); exit 1 otherwise");
   cmd->add_option("--cap-angle", args->inspect.cap_angle, "a face with an angle above this is a cap (degrees)")
       ->default_val(175.0)->check(CLI::Range(90.0, 180.0));
   cmd->add_option("--needle-angle", args->inspect.needle_angle,
@@ -269,6 +288,9 @@ void add_check(CLI::App& app, int& exit_code) {
     const Soup soup = read_soup(args->file);
     const double read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     args->inspect.parallel = !args->sequential;
+    // TetGen's segment test costs a spatial search: when TetGen-readiness is
+    // asked for, or a certificate may record it.
+    args->inspect.tetgen_segments = args->tetgen_ready || !args->certificate.empty();
     args->inspect.observer = &progress;
     const Report r = inspect(soup, args->inspect);
     const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

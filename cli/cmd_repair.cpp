@@ -16,6 +16,13 @@
 namespace polyheal::cli {
 namespace {
 
+std::string joined(const std::vector<std::string>& parts) {
+  std::string out;
+  for (const std::string& p : parts) out += (out.empty() ? "" : ", ") + p;
+  return out;
+}
+
+
 struct RepairArgs : RepairFiles {
   std::string steps = "all", weld, t_junction, max_deviation = "1%", certificate, provenance, for_tool, smesh;
   bool no_fill = false, drop_enclosed = false;
@@ -136,9 +143,10 @@ void print_text(const RepairArgs& args, const Outcome& o) {
   const std::vector<std::string> d = defects(a.out);
   std::string verdict = a.certified ? (args.options.for_tetgen ? "CERTIFIED CLEAN and TetGen-ready" : "CERTIFIED CLEAN")
                                     : "DEFECTS REMAIN:";
-  if (!a.certified && args.options.for_tetgen && a.out.certified_clean())
-    verdict = "clean, but NOT TetGen-ready: " + std::to_string(a.out.sharp_folds.size()) + " sharp folds, " +
-              std::to_string(a.out.nearly_degenerate_faces.size()) + " nearly degenerate faces;";
+  if (!a.certified && args.options.for_tetgen && a.out.certified_clean()) {
+    verdict = "clean, but NOT TetGen-ready:";
+    for (const std::string& x : defects(a.out, true)) verdict += " " + x + ";";
+  }
   for (const std::string& x : d) verdict += " " + x + ";";
   for (const std::string& p : o.problems)
     if (a.certified) verdict += "; " + p;
@@ -177,9 +185,7 @@ void run(RepairArgs& args, int& exit_code) {
         o.a = assess(input, result.input, written, o.max_deviation, args.options.for_tetgen, result.hole_fills);
         if (!o.a.certified)
           o.problems.push_back(args.options.for_tetgen && o.a.out.certified_clean()
-                                   ? "clean but not TetGen-ready: " + std::to_string(o.a.out.sharp_folds.size()) +
-                                         " sharp folds, " + std::to_string(o.a.out.nearly_degenerate_faces.size()) +
-                                         " nearly degenerate faces"
+                                   ? "clean but not TetGen-ready: " + joined(defects(o.a.out, true))
                                    : std::string("not certified"));
         if (args.options.for_tetgen) {
           // The surface as written, in TetGen's own format beside it.

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "polyheal/inspect/report.h"
+#include "polyheal/repair/pipeline.h"
 
 namespace polyheal::cli {
 
@@ -17,20 +18,12 @@ inline double peak_memory_mb() {
   return double(u.ru_maxrss) / 1024.0;  // Linux: kilobytes
 }
 
-/// What keeps the written file from being certified, one phrase each.
-inline std::vector<std::string> defects(const Report& out) {
+/// What keeps the written file from being certified (with `for_tetgen`:
+/// TetGen-ready), one phrase each.
+inline std::vector<std::string> defects(const Report& out, bool for_tetgen = false) {
   std::vector<std::string> d;
-  auto add = [&](std::size_t n, const char* what) {
-    if (n) d.push_back(std::to_string(n) + " " + what);
-  };
-  add(out.boundary_edges.size(), "boundary edges");
-  add(out.nonmanifold_edges.size(), "non-manifold edges");
-  add(out.nonmanifold_vertices.size(), "non-manifold vertices");
-  add(out.misoriented_edges.size(), "misoriented edges");
-  add(out.degenerate_faces.size(), "degenerate faces");
-  add(out.duplicate_faces.size(), "duplicate faces");
-  add(out.self_intersections.size(), "intersecting pairs");
-  if (out.faces == 0) d.push_back("no face left");
+  for (const auto& [what, n] : defect_kinds(out, for_tetgen))
+    d.push_back(what == "no face left" ? what : std::to_string(n) + " " + what);
   return d;
 }
 
@@ -56,8 +49,12 @@ inline nlohmann::json checks_json(const Report& r) {
           {"self_intersecting_pairs", r.self_intersections.size()},
           {"tetgen_sharp_folds", r.sharp_folds.size()},
           {"tetgen_nearly_degenerate_faces", r.nearly_degenerate_faces.size()},
+          // null: not looked for (InspectOptions::tetgen_segments), so TetGen-readiness is not decided
+          {"tetgen_vertices_near_edges",
+           r.vertices_near_edges_checked ? nlohmann::json(r.vertices_near_edges.size()) : nlohmann::json(nullptr)},
           {"certified_clean", r.certified_clean()},
-          {"tetgen_ready", r.tetgen_ready()}};
+          {"tetgen_ready", r.vertices_near_edges_checked || !r.certified_clean() ? nlohmann::json(r.tetgen_ready())
+                                                                                 : nlohmann::json(nullptr)}};
 }
 
 }  // namespace polyheal::cli

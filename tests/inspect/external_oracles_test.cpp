@@ -27,7 +27,9 @@ TEST_CASE("external: tetgen -d agrees with our self-intersection verdict", "[ins
   for (const auto& [name, intersecting] : fixtures) {
     INFO(name);
     const Soup s = read_soup(test::fixture(name));
-    const Report r = inspect(s);
+    InspectOptions io;
+    io.tetgen_segments = true;
+    const Report r = inspect(s, io);
     REQUIRE(r.closed);
     CHECK(r.self_intersections.empty() == !intersecting);
     // TetGen writes next to its input: work on a copy in the build tree.

@@ -6,6 +6,7 @@
 #include <algorithm>
 
 #include "polyheal/inspect/report.h"
+#include "polyheal/io/write.h"
 #include "support/builders.h"
 
 using namespace polyheal;
@@ -90,7 +91,10 @@ TEST_CASE("inspect: triangle pair semantics of PMP::self_intersections", "[inspe
 TEST_CASE("inspect: a closed tetrahedron is certified clean", "[inspect][smoke]") {
   const Report r = inspect(test::tetrahedron());
   CHECK(r.certified_clean());
-  CHECK(r.tetgen_ready());
+  CHECK_FALSE(r.tetgen_ready());  // not decided without the segment search
+  InspectOptions io;
+  io.tetgen_segments = true;
+  CHECK(inspect(test::tetrahedron(), io).tetgen_ready());
   CHECK(r.components == 1);
   CHECK(r.boundary_edges.empty());
   CHECK(r.signed_volume == Approx(1.0 / 6));
@@ -192,5 +196,34 @@ TEST_CASE("inspect: TetGen's tolerances are reported apart from exact defects", 
     const Report q = inspect(sliver);
     CHECK(q.nearly_degenerate_faces.size() == (nearly ? 1u : 0u));
     CHECK(q.degenerate_faces.empty());
+  }
+}
+
+TEST_CASE("inspect: a vertex within TetGen's tolerance of an edge it is not on stops TetGen, and is reported",
+          "[inspect][tetgen]") {
+  // Two disjoint tetrahedra; a corner of the second lies off the first's
+  // edge (0,0,0)-(1,0,0) by h * sqrt(2) (outside it: no exact intersection).
+  // TetGen (-T 1e-8) cannot recover that edge as a segment below ~1e-8.
+  for (const auto& [h, near] : {std::pair{1e-9, true}, {1e-7, false}}) {
+    INFO("offset " << h);
+    const Soup s = test::concat(test::tetrahedron(),
+                                test::soup({{0, -1, -1}, {1, -1, -1}, {0.5, -h, -h}, {0.5, -1, 0}},
+                                           {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}));
+    InspectOptions io;
+    io.tetgen_segments = true;
+    const Report r = inspect(s, io);
+    REQUIRE(r.certified_clean());
+    CHECK(r.vertices_near_edges.size() == (near ? 1u : 0u));
+    CHECK(r.tetgen_ready() == !near);
+    if (near) {
+      CHECK(r.vertices_near_edges[0].vertex == 6);
+      CHECK(r.vertices_near_edges[0].a == 0);
+      CHECK(r.vertices_near_edges[0].b == 1);
+    }
+    const std::string p = test::scratch(near ? "near_edge.off" : "far_edge.off");
+    write_soup(s, p);
+    // TetGen with its defaults (-p; -Y, which keeps the surface as given and
+    // recovers no segment, meshes both).
+    CHECK(test::tetgen_meshes(p, near ? "tg_near_edge.off" : "tg_far_edge.off", "-pQ") == !near);
   }
 }

@@ -257,7 +257,9 @@ TEST_CASE("degenerate with a fold angle: a spike folded onto its neighbours is c
 
   o.fold_angle = 0.1;
   const DegenerateResult r = remove_degenerate_faces(s, o);
-  const Report out = inspect(r.soup);
+  InspectOptions io;
+  io.tetgen_segments = true;
+  const Report out = inspect(r.soup, io);
   CHECK(out.certified_clean());
   CHECK(out.sharp_folds.empty());
   CHECK(out.tetgen_ready());

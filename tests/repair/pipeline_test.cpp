@@ -135,26 +135,28 @@ TEST_CASE("repair: a result with no face left is never kept (a double-sided shee
 
 TEST_CASE("repair --for tetgen: what the grid leaves folded is fixed after it, and TetGen meshes the result",
           "[pipeline][tetgen]") {
-  // Two corpus soups only the grid closes. Its feature placement folds a few
-  // faces below TetGen's 0.1 degrees (deer_bound: spikes, collapsed), and in
-  // the chair's thin gaps it leaves closed tetrahedra folded flat (no
-  // collapse can fix a tetrahedron: they are removed, being within a cell).
-  for (const char* name : {"corpus/vhacd__deer_bound.off", "corpus/trimesh__chair_model.obj"}) {
+  // Corpus soups only the grid closes. Its feature placement folds a few
+  // faces below TetGen's 0.1 degrees (deer_bound: spikes, collapsed); in the
+  // chair's thin gaps it leaves closed tetrahedra folded flat (no collapse
+  // can fix a tetrahedron: they are removed, being within a cell); on
+  // ALSTOM_TEST4 its coarsening leaves a vertex 1e-14 from an edge it is not
+  // on (tetgen -p aborts), which the grid without coarsening avoids.
+  for (const char* name :
+       {"corpus/vhacd__deer_bound.off", "corpus/trimesh__chair_model.obj", "corpus/cgal__ALSTOM_TEST4.off"}) {
     INFO(name);
     const Soup in = read_soup(test::fixture(name));
     RepairOptions o;
     o.for_tetgen = true;
     const RepairResult r = repair(in, o);
     CHECK(ran(r.report, "rebuild", true));
-    const StageReport& last = r.report.stages.back();
-    CHECK(last.name == "degenerate (TetGen tolerances)");
-    CHECK(last.accepted);
+    // the grid alone was not TetGen-ready: a later stage made it so
+    CHECK((ran(r.report, "degenerate (TetGen tolerances)", true) || ran(r.report, "rebuild (not coarsened)", true)));
     std::string stem = std::string(name).substr(7);  // TetGen takes the name up to its first dot
     stem = stem.substr(0, stem.find('.'));
     const std::string p = test::scratch("tg_" + stem + ".off");
     write_soup(r.soup, p);
     const Assessment a = assess(in, r.input, read_soup(p), 0.05 * r.report.diagonal, true);
     CHECK(a.certified);  // tetgen_ready on the file as written
-    CHECK(test::tetgen_meshes(p, "tgm_" + stem + ".off"));
+    CHECK(test::tetgen_meshes(p, "tgm_" + stem + ".off", "-pQ"));  // TetGen's defaults
   }
 }

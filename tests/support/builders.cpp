@@ -51,10 +51,10 @@ std::string run(const std::string& command) {
   return out;
 }
 
-bool tetgen_meshes(const std::string& path, const std::string& name) {
+bool tetgen_meshes(const std::string& path, const std::string& name, const std::string& switches) {
   const std::string copy = scratch(name);
   std::filesystem::copy_file(path, copy, std::filesystem::copy_options::overwrite_existing);
-  return run("tetgen -pYQ '" + copy + "' >/dev/null 2>&1; echo \"exit=$?\"").find("exit=0") != std::string::npos;
+  return run("tetgen " + switches + " '" + copy + "' >/dev/null 2>&1; echo \"exit=$?\"").find("exit=0") != std::string::npos;
 }
 
 }  // namespace polyheal::test

@@ -22,10 +22,10 @@ std::string scratch(const std::string& name);   // a fresh path in the build tre
 void write_bytes(const std::string& path, const std::string& bytes);
 /// Runs a shell command; its stdout and stderr together.
 std::string run(const std::string& command);
-/// Does `tetgen -pYQ` tetrahedralise `path` (a surface mesh file)? TetGen
+/// Does `tetgen SWITCHES` tetrahedralise `path` (a surface mesh file)? TetGen
 /// writes beside its input, so it works on a copy, scratch(`name`): a name
 /// no concurrently running test uses.
-bool tetgen_meshes(const std::string& path, const std::string& name);
+bool tetgen_meshes(const std::string& path, const std::string& name, const std::string& switches = "-pYQ");
 
 }  // namespace polyheal::test
 

@@ -233,6 +233,19 @@ bool fold_angle_less(const Point3d& p, const Point3d& q, const Point3d& r, const
   return less_from_signs(dot_sign, test_sign, cos_threshold);
 }
 
+bool is_nearly_on_segment(const Point3d& p, const Point3d& a, const Point3d& b, double eps) {
+  if (is_collinear(a, b, p)) return false;  // exactly on the line: an exact defect, not a tolerance one
+  return filtered([&](auto nt) {
+    using NT = decltype(nt);
+    const Vec<NT> ab = sub<NT>(b, a), ap = sub<NT>(p, a), bp = sub<NT>(p, b);
+    if (!(dot(ap, ab) > NT(0)) || !(dot(bp, ab) < NT(0))) return false;
+    // distance^2 = |ap x ab|^2 / |ab|^2 <= eps^2 |ab|^2
+    const Vec<NT> n = cross(ap, ab);
+    const NT l2 = dot(ab, ab);
+    return bool(dot(n, n) <= NT(eps) * NT(eps) * l2 * l2);
+  });
+}
+
 bool is_nearly_degenerate(const Point3d& a, const Point3d& b, const Point3d& c, double eps) {
   // Quick reject in doubles: each component of ab x ac is off by at most
   // ~8 eps_mach |ab||ac| <= 1e-14 L^2 (L the longest edge), so a computed

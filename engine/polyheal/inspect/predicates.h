@@ -38,6 +38,12 @@ bool angle_less(const Point3d& apex, const Point3d& b, const Point3d& c, double 
 /// flat) is strictly below the threshold. Precondition: neither is degenerate.
 bool fold_angle_less(const Point3d& p, const Point3d& q, const Point3d& r, const Point3d& s, double cos_threshold);
 
+/// True when p lies within eps * |ab| of segment ab's line (and not exactly
+/// on it), its projection strictly between a and b: a vertex TetGen would
+/// take for lying on the segment (its relative tolerance -T, 1e-8 by
+/// default) without it being there.
+bool is_nearly_on_segment(const Point3d& p, const Point3d& a, const Point3d& b, double eps);
+
 /// True when triangle abc is not exactly degenerate but its area is tiny
 /// relative to its longest edge: |ab x ac| <= eps * longest_edge^2 (TetGen's
 /// relative collinearity tolerance, eps = 1e-8 by default).

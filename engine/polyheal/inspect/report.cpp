@@ -138,6 +138,16 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
   for (const auto& v : folds) r.sharp_folds.insert(r.sharp_folds.end(), v.begin(), v.end());
   std::sort(r.sharp_folds.begin(), r.sharp_folds.end());
 
+  // TetGen: a vertex within its tolerance of an edge it is not on.
+  if (o.tetgen_segments) {
+    r.vertices_near_edges_checked = true;
+    std::vector<std::array<Index, 2>> edges;
+    edges.reserve(topo.interior_edges.size() + topo.boundary_edges.size());
+    for (const Topology::InteriorEdge& e : topo.interior_edges) edges.push_back({e.a, e.b});
+    for (const Edge& e : topo.boundary_edges) edges.push_back({e.a, e.b});
+    r.vertices_near_edges = find_vertices_near_edges(soup, edges, o.tetgen_epsilon);
+  }
+
   // Bounding box and signed volume (a measurement, not a predicate).
   r.bbox_min = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
                 std::numeric_limits<double>::infinity()};

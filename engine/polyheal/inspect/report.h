@@ -24,6 +24,11 @@ struct InspectOptions {
   double needle_angle = 5.0;       // degrees; a face with a smaller angle is a needle (unless a cap)
   double tetgen_fold_angle = 0.1;  // degrees; TetGen's "nearly self-intersecting facets" bound
   double tetgen_epsilon = 1e-8;    // TetGen's relative tolerance (-T): near-collinear faces
+  /// Also search for vertices nearly on an edge they are not on (TetGen's
+  /// segment recovery stops on them): a spatial search over all edges and
+  /// points, about half a second per million faces on 2 cores, so asked
+  /// for; tetgen_ready() requires it.
+  bool tetgen_segments = false;
   bool parallel = true;            // TBB in the self-intersection pass
   Observer* observer = nullptr;
 };
@@ -56,6 +61,8 @@ struct Report {
   // TetGen's tolerances (not exact defects)
   std::vector<FacePair> sharp_folds;             // adjacent faces folded below tetgen_fold_angle
   std::vector<std::size_t> nearly_degenerate_faces;
+  std::vector<VertexNearEdge> vertices_near_edges;  // welded ids; a vertex within tetgen_epsilon of an edge
+  bool vertices_near_edges_checked = false;         // InspectOptions::tetgen_segments
   // shape
   bool closed = false, manifold = false, oriented = false;
   double signed_volume = 0.0;  // double sum of tetrahedra; meaningful when closed and oriented
@@ -66,8 +73,12 @@ struct Report {
   /// Closed, 2-manifold, consistently oriented, no degenerate face, no
   /// duplicate face, no self-intersection, at least one face.
   bool certified_clean() const;
-  /// certified_clean() and nothing TetGen's tolerances would trip over.
-  bool tetgen_ready() const { return certified_clean() && sharp_folds.empty() && nearly_degenerate_faces.empty(); }
+  /// certified_clean() and nothing TetGen's tolerances would trip over
+  /// (false unless inspected with InspectOptions::tetgen_segments).
+  bool tetgen_ready() const {
+    return certified_clean() && sharp_folds.empty() && nearly_degenerate_faces.empty() &&
+           vertices_near_edges_checked && vertices_near_edges.empty();
+  }
 };
 
 Report inspect(const Soup& soup, const InspectOptions& options = {});

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <limits>
 
 #include <CGAL/box_intersection_d.h>
@@ -9,6 +10,7 @@
 #include <tbb/parallel_invoke.h>
 
 #include "polyheal/inspect/detail/parallel.h"
+#include "polyheal/inspect/predicates.h"
 #include "polyheal/inspect/detail/triangle_pair.h"
 
 namespace polyheal {
@@ -174,6 +176,43 @@ bool does_self_intersect(const Soup& soup, const SelfIntersectionOptions& option
   std::atomic<bool> stop{false};
   scan(soup, options, [&](std::size_t, std::size_t) { stop = true; }, stop);
   return stop.load();
+}
+
+std::vector<VertexNearEdge> find_vertices_near_edges(const Soup& soup, const std::vector<std::array<Index, 2>>& edges,
+                                                     double eps) {
+  // A point within eps |ab| of the segment lies in its box grown by that
+  // much (rounded outward, and a little more for the rounding of |ab|).
+  std::vector<Box> edge_boxes, point_boxes;
+  edge_boxes.reserve(edges.size());
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    const Point3d &a = soup.points[edges[i][0]], &b = soup.points[edges[i][1]];
+    double d2 = 0;
+    for (int c = 0; c < 3; ++c) d2 += (a[c] - b[c]) * (a[c] - b[c]);
+    const double grow = eps * std::sqrt(d2) * (1 + 1e-9);
+    double lo[3], hi[3];
+    for (int c = 0; c < 3; ++c) {
+      lo[c] = std::nextafter(std::min(a[c], b[c]) - grow, -std::numeric_limits<double>::infinity());
+      hi[c] = std::nextafter(std::max(a[c], b[c]) + grow, std::numeric_limits<double>::infinity());
+    }
+    edge_boxes.emplace_back(lo, hi, static_cast<std::uint32_t>(i));
+  }
+  point_boxes.reserve(soup.points.size());
+  for (std::size_t v = 0; v < soup.points.size(); ++v) {
+    double p[3] = {soup.points[v][0], soup.points[v][1], soup.points[v][2]};
+    point_boxes.emplace_back(p, p, static_cast<std::uint32_t>(v));
+  }
+  std::vector<VertexNearEdge> out;
+  CGAL::box_intersection_d(edge_boxes.begin(), edge_boxes.end(), point_boxes.begin(), point_boxes.end(),
+                           [&](const Box& e, const Box& p) {
+                             const std::array<Index, 2>& ab = edges[e.info()];
+                             const Index v = static_cast<Index>(p.info());
+                             if (v == ab[0] || v == ab[1]) return;
+                             if (is_nearly_on_segment(soup.points[v], soup.points[ab[0]], soup.points[ab[1]], eps))
+                               out.push_back({v, std::min(ab[0], ab[1]), std::max(ab[0], ab[1])});
+                           },
+                           CGAL::Box_intersection_d::Box_traits_d<Box>(), kCutoff);
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 }  // namespace polyheal

@@ -7,6 +7,7 @@
 // Polygons are fan-triangulated; pairs are reported by face id.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -34,5 +35,21 @@ std::vector<FacePair> find_self_intersections(const Soup& soup, const SelfInters
 
 /// Early-exit form: true at the first intersecting pair found.
 bool does_self_intersect(const Soup& soup, const SelfIntersectionOptions& options = {});
+
+/// A vertex within TetGen's relative tolerance of an edge it is not on (the
+/// edge a-b, a < b): TetGen cannot recover that edge as a segment (it
+/// stops while "Delaunizing segments"). Same broad phase as above: edge
+/// boxes grown by the tolerance against points.
+struct VertexNearEdge {
+  Index vertex, a, b;
+  bool operator<(const VertexNearEdge& o) const {
+    return vertex != o.vertex ? vertex < o.vertex : a != o.a ? a < o.a : b < o.b;
+  }
+};
+
+/// Every point of `soup` nearly on (predicates.h is_nearly_on_segment, eps)
+/// one of `edges` (index pairs into soup.points), sorted.
+std::vector<VertexNearEdge> find_vertices_near_edges(const Soup& soup, const std::vector<std::array<Index, 2>>& edges,
+                                                     double eps);
 
 }  // namespace polyheal

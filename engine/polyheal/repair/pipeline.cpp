@@ -39,8 +39,9 @@ struct State {
 };
 
 /// The surface without its closed components that are no larger than
-/// `size` (bounding-box diagonal) and hold a face TetGen's tolerances stop
-/// on (a sharp fold or a nearly degenerate face): the flat tetrahedra the
+/// `size` (bounding-box diagonal) and hold what TetGen's tolerances stop on
+/// (a sharp fold, a nearly degenerate face, a vertex nearly on an edge —
+/// welded ids, as the report gives them): the flat tetrahedra the
 /// grid can leave in a thin gap, which no collapse can fix (every edge of a
 /// tetrahedron fails the link condition). `dropped` counts them.
 Soup without_tiny_flagged_components(const Soup& s, const Report& r, double size, std::size_t& dropped) {
@@ -57,6 +58,10 @@ Soup without_tiny_flagged_components(const Soup& s, const Report& r, double size
   std::vector<char> flagged(t.components, 0), open(t.components, 0);
   for (const FacePair& p : r.sharp_folds) flagged[t.face_component[p.first]] = 1;
   for (std::size_t f : r.nearly_degenerate_faces) flagged[t.face_component[f]] = 1;
+  std::vector<std::size_t> vertex_face(s.points.size(), 0);  // vertices near edges: by a face of theirs
+  for (std::size_t f = 0; f < welded.face_count(); ++f)
+    for (Index i : welded.face(f)) vertex_face[i] = f;
+  for (const VertexNearEdge& v : r.vertices_near_edges) flagged[t.face_component[vertex_face[v.vertex]]] = 1;
   for (const Edge& e : t.boundary_edges) open[t.face_component[e.uses.front().face]] = 1;
   std::vector<std::array<double, 6>> box(t.components, {HUGE_VAL, HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, -HUGE_VAL});
   for (std::size_t f = 0; f < s.face_count(); ++f)
@@ -121,11 +126,17 @@ class Pipeline {
     // folds on a surface that is otherwise clean, before the grid is tried.
     if (o_.for_tetgen && wanted(kStepDegenerate) && !done() && cur_.report.certified_clean()) tetgen_shapes();
     if (wanted(kStepRebuild) && !done()) {
-      const double cell = rebuild();
-      // The grid's feature placement can fold faces below TetGen's angle;
-      // the grid surface is a cell from the input already, and its spikes
-      // are about a cell long: collapses may move it that far again.
+      // The grid's coarsening and feature placement can fold faces below
+      // TetGen's angle or leave a vertex nearly on an edge; the grid surface
+      // is a cell from the input already, and its spikes are about a cell
+      // long: collapses may move it that far again. What they cannot fix,
+      // the grid without coarsening (more faces) usually avoids.
+      const double cell = rebuild(true);
       if (o_.for_tetgen && wanted(kStepDegenerate) && !done() && cur_.report.certified_clean()) tetgen_shapes(cell);
+      if (o_.for_tetgen && !done()) {
+        rebuild(false);
+        if (wanted(kStepDegenerate) && !done() && cur_.report.certified_clean()) tetgen_shapes(cell);
+      }
     }
     result_.soup = std::move(cur_.soup);
     r.seconds = seconds_since(t0);
@@ -138,7 +149,9 @@ class Pipeline {
 
   State inspected(Soup soup) const {
     State s;
-    s.report = inspect(soup);
+    InspectOptions io;
+    io.tetgen_segments = o_.for_tetgen;
+    s.report = inspect(soup, io);
     s.defects = defect_count(s.report, o_.for_tetgen);
     s.soup = std::move(soup);
     return s;
@@ -333,14 +346,16 @@ class Pipeline {
     });
   }
 
+  /// `simplify`: coarsen the grid's planar regions and decimate (rebuild.h).
   /// Returns the grid's cell size (0 when the stage was refused).
-  double rebuild() {
+  double rebuild(bool simplify) {
     // From the input, not the current surface: earlier stages may have
     // closed a sheet by filling its boundary (a flat double layer), which
     // the overlay grid would take for a volume.
     double cell = 0;
-    stage("rebuild", [&](StageReport& s) {
+    stage(simplify ? "rebuild" : "rebuild (not coarsened)", [&](StageReport& s) {
       RebuildOptions ro;
+      ro.simplify = ro.decimate = simplify;
       ro.certify = false;
       ro.keep_clean = false;
       ro.observer = o_.observer;
@@ -439,11 +454,30 @@ unsigned parse_steps(const std::string& list) {
   return mask;
 }
 
+std::vector<std::pair<std::string, std::size_t>> defect_kinds(const Report& r, bool for_tetgen) {
+  std::vector<std::pair<std::string, std::size_t>> d;
+  auto add = [&](const char* what, std::size_t n) {
+    if (n) d.emplace_back(what, n);
+  };
+  add("boundary edges", r.boundary_edges.size());
+  add("non-manifold edges", r.nonmanifold_edges.size());
+  add("non-manifold vertices", r.nonmanifold_vertices.size());
+  add("misoriented edges", r.misoriented_edges.size());
+  add("degenerate faces", r.degenerate_faces.size());
+  add("duplicate faces", r.duplicate_faces.size());
+  add("intersecting pairs", r.self_intersections.size());
+  if (for_tetgen) {
+    add("sharp folds", r.sharp_folds.size());
+    add("nearly degenerate faces", r.nearly_degenerate_faces.size());
+    add("vertices nearly on an edge", r.vertices_near_edges.size());
+  }
+  if (r.faces == 0) d.emplace_back("no face left", 1);
+  return d;
+}
+
 std::size_t defect_count(const Report& r, bool for_tetgen) {
-  std::size_t n = r.boundary_edges.size() + r.nonmanifold_edges.size() + r.nonmanifold_vertices.size() +
-                  r.misoriented_edges.size() + r.duplicate_faces.size() + r.degenerate_faces.size() +
-                  r.self_intersections.size() + (r.faces == 0 ? 1 : 0);
-  if (for_tetgen) n += r.sharp_folds.size() + r.nearly_degenerate_faces.size();
+  std::size_t n = 0;
+  for (const auto& [what, count] : defect_kinds(r, for_tetgen)) n += count;
   return n;
 }
 
@@ -454,7 +488,9 @@ RepairResult repair(const Soup& input, const RepairOptions& options) { return Pi
 Assessment assess(const Soup& input, const Report& in, const Soup& written, double max_deviation, bool for_tetgen,
                   const std::vector<std::array<Point3d, 3>>& hole_fills) {
   Assessment a;
-  a.out = inspect(written);
+  InspectOptions io;
+  io.tetgen_segments = for_tetgen;
+  a.out = inspect(written, io);
   a.certified = certified(a.out, for_tetgen);
   a.components_in = in.components;
   a.components_out = a.out.components;

@@ -98,6 +98,9 @@ struct RepairResult {
 /// and misoriented edges, non-manifold vertices, duplicate and degenerate
 /// faces, self-intersecting pairs (and, for TetGen, its tolerance issues).
 std::size_t defect_count(const Report& r, bool for_tetgen);
+/// The same by kind, in the order above: ("boundary edges", n), ... for
+/// each kind present; ("no face left", 1) for an empty surface.
+std::vector<std::pair<std::string, std::size_t>> defect_kinds(const Report& r, bool for_tetgen);
 bool certified(const Report& r, bool for_tetgen);
 
 RepairResult repair(const Soup& input, const RepairOptions& options = {});
