@@ -160,3 +160,28 @@ TEST_CASE("repair --for tetgen: what the grid leaves folded is fixed after it, a
     CHECK(test::tetgen_meshes(p, "tgm_" + stem + ".off", "-pQ"));  // TetGen's defaults
   }
 }
+
+TEST_CASE("assess: provenance matches polygons corner for corner, in either orientation and from any corner",
+          "[pipeline]") {
+  // A cube of six quads; the output has them rotated and reversed, and one
+  // quad with its corners in another cyclic order (a different face).
+  Soup in;
+  in.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  const std::vector<std::vector<Index>> quads = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                                                 {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+  for (const auto& q : quads) in.add_face(q.begin(), q.end());
+  Soup out;
+  out.points = in.points;
+  for (std::size_t f = 0; f < 5; ++f) {
+    std::vector<Index> q = quads[f];
+    std::rotate(q.begin(), q.begin() + std::ptrdiff_t(f % 4), q.end());
+    if (f % 2) std::reverse(q.begin(), q.end());
+    out.add_face(q.begin(), q.end());
+  }
+  const std::vector<Index> crossed = {3, 4, 0, 7};  // the last quad's corners, another cycle
+  out.add_face(crossed.begin(), crossed.end());
+  const Assessment a = assess(in, inspect(in), out, 0.01, false);
+  CHECK(a.faces_kept == 5);
+  for (std::size_t f = 0; f < 5; ++f) CHECK(a.provenance[f] == std::int64_t(f));
+  CHECK(a.provenance[5] == -1);
+}

@@ -5,10 +5,10 @@
 #include <chrono>
 #include <optional>
 #include <cmath>
-#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/topology.h"
@@ -397,10 +397,11 @@ double face_area(const Soup& s, std::size_t f) {
   return a;
 }
 
-/// Key of a triangle by its corner positions, independent of rotation and
-/// orientation (provenance: "the same face").
+/// Key of a face by its corner positions in cyclic order, independent of
+/// the starting corner and of orientation (provenance: "the same face"):
+/// the smallest of its rotations, read either way round.
 struct CornerKey {
-  std::array<Point3d, 3> p;
+  std::vector<Point3d> p;
   bool operator==(const CornerKey& o) const { return p == o.p; }
 };
 struct CornerKeyHash {
@@ -411,11 +412,23 @@ struct CornerKeyHash {
     return h;
   }
 };
+CornerKey corner_key(const std::vector<Point3d>& corners) {
+  const std::size_t n = corners.size();
+  const Point3d& least = *std::min_element(corners.begin(), corners.end());
+  CornerKey best;
+  for (int way = 0; way < 2; ++way)
+    for (std::size_t r = 0; r < n; ++r) {
+      if (corners[r] != least) continue;  // the smallest rotation starts at a smallest corner
+      std::vector<Point3d> c(n);
+      for (std::size_t k = 0; k < n; ++k) c[k] = corners[way ? (r + n - k) % n : (r + k) % n];
+      if (best.p.empty() || c < best.p) best.p = std::move(c);
+    }
+  return best;
+}
 CornerKey corner_key(const Soup& s, std::size_t f) {
-  const FaceView v = s.face(f);
-  CornerKey k{{s.points[v[0]], s.points[v[1]], s.points[v[2]]}};
-  std::sort(k.p.begin(), k.p.end());
-  return k;
+  std::vector<Point3d> corners;
+  for (Index i : s.face(f)) corners.push_back(s.points[i]);
+  return corner_key(corners);
 }
 
 }  // namespace
@@ -512,16 +525,13 @@ Assessment assess(const Soup& input, const Report& in, const Soup& written, doub
     // The surface moved: how far the output is from the input, but for
     // faces spanning input vertices only (hole fills), and the input, but
     // for what the output encloses, from the output.
-    std::set<std::array<Point3d, 3>> fill_keys;
-    for (std::array<Point3d, 3> t : hole_fills) {
-      std::sort(t.begin(), t.end());
-      fill_keys.insert(t);
-    }
+    std::unordered_set<CornerKey, CornerKeyHash> fill_keys;
+    for (const std::array<Point3d, 3>& t : hole_fills) fill_keys.insert(corner_key({t.begin(), t.end()}));
     Soup moved, fills;
     moved.points = fills.points = written.points;
     for (std::size_t f = 0; f < written.face_count(); ++f) {
       const FaceView v = written.face(f);
-      const bool fill = v.size() == 3 && fill_keys.count(corner_key(written, f).p) > 0;
+      const bool fill = v.size() == 3 && fill_keys.count(corner_key(written, f)) > 0;
       (fill ? fills : moved).add_face(v.begin(), v.end());
     }
     double output_moved = moved.face_count() ? detail::one_sided_distances(moved, input, a.error_bound)[0] : 0.0;
@@ -543,13 +553,12 @@ Assessment assess(const Soup& input, const Report& in, const Soup& written, doub
   std::unordered_map<CornerKey, std::int64_t, CornerKeyHash> by_corners;
   for (std::size_t f = 0; f < input.face_count(); ++f) {
     a.area_in += face_area(input, f);
-    if (input.face(f).size() == 3) by_corners.emplace(corner_key(input, f), std::int64_t(f));
+    by_corners.emplace(corner_key(input, f), std::int64_t(f));
   }
   a.provenance.assign(written.face_count(), -1);
   for (std::size_t f = 0; f < written.face_count(); ++f) {
     const double area = face_area(written, f);
     a.area_out += area;
-    if (written.face(f).size() != 3) continue;
     auto it = by_corners.find(corner_key(written, f));
     if (it == by_corners.end()) continue;
     a.provenance[f] = it->second;
