@@ -11,6 +11,13 @@
 namespace polyheal::cli {
 namespace {
 
+nlohmann::json regions_json(const std::vector<Region>& regions) {
+  auto a = nlohmann::json::array();
+  for (const Region& g : regions) a.push_back({{"count", g.count}, {"min", g.lo}, {"max", g.hi}});
+  return a;
+}
+
+
 struct RebuildArgs : RepairFiles {
   std::string cell;  // "0.5" (model units) or "1%" (of the bbox diagonal)
   std::string sheets = "shell";
@@ -70,7 +77,12 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
       {"hausdorff_error_bound", r.hausdorff_error_bound},
       {"input_to_output", r.input_to_output},
       {"output_to_input", r.output_to_input},
-      {"lost", {{"faces", r.lost_faces}, {"components", r.lost_components}, {"area_fraction", r.lost_area_fraction}}},
+      {"lost",
+       {{"faces", r.lost_faces},
+        {"components", r.lost_components},
+        {"area_fraction", r.lost_area_fraction},
+        {"where", regions_json(r.lost_regions)}}},  // each component lost: faces, bounding box
+      {"open_loops", regions_json(r.open_loops)},   // each open boundary loop of the input: edges, bounding box
       {"absorbed_faces", r.absorbed_faces},
       {"hausdorff_cells", r.cell > 0 && r.hausdorff >= 0 ? r.hausdorff / r.cell : -1},
       {"seconds",
@@ -82,6 +94,20 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
         {"simplify", r.seconds_simplify},
         {"write_and_certify", write_s}}},
   };
+}
+
+/// "N edges in [x y z]-[x y z]; ..." for the first few regions.
+std::string where(const std::vector<Region>& regions, const char* what) {
+  std::string out;
+  char buf[256];
+  for (std::size_t i = 0; i < regions.size() && i < 5; ++i) {
+    const Region& g = regions[i];
+    std::snprintf(buf, sizeof buf, "%s%zu %s in [%g %g %g]-[%g %g %g]", i ? "; " : "", g.count, what, g.lo[0], g.lo[1],
+                  g.lo[2], g.hi[0], g.hi[1], g.hi[2]);
+    out += buf;
+  }
+  if (regions.size() > 5) out += "; and " + std::to_string(regions.size() - 5) + " more (--json lists all)";
+  return out;
 }
 
 void print_text(const RebuildArgs& a, const RebuildReport& r) {
@@ -109,6 +135,7 @@ void print_text(const RebuildArgs& a, const RebuildReport& r) {
       std::printf("  => the soup encloses no volume (no grid corner has winding number > 1/2; %zu open boundary "
                   "loops; --sheets shell would wrap them): the input is written as read, NOT CERTIFIED\n",
                   r.boundary_loops);
+      if (!r.open_loops.empty()) std::printf("  open loops: %s\n", where(r.open_loops, "edges").c_str());
       return;
     }
     std::printf("  output: %zu faces extracted, %zu planar vertices collapsed, %zu decimated -> %zu faces, %zu "
@@ -133,6 +160,7 @@ void print_text(const RebuildArgs& a, const RebuildReport& r) {
                 "not represented (sheets left out, parts thinner than a cell)%s\n",
                 r.lost_faces, 100 * r.lost_area_fraction,
                 r.lost_components ? (", " + std::to_string(r.lost_components) + " whole components LOST").c_str() : "");
+  if (!r.lost_regions.empty()) std::printf("  lost components: %s\n", where(r.lost_regions, "faces").c_str());
   if (r.certified)
     std::printf("  => CERTIFIED: closed, 2-manifold, oriented, no degenerate face, no self-intersection\n");
   else

@@ -139,6 +139,7 @@ grep_out '"cell_rule": "--cell, relative to the diagonal"' "$tmp/out" "rebuild -
 printf 'OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n' > "$tmp/sheet.off"
 expect 1 "rebuild --sheets drop invents no volume for an open sheet" -- "$bin" rebuild --sheets drop "$tmp/sheet.off" -o "$tmp/sheet_out.off"
 grep_out "encloses no volume" "$tmp/out" "rebuild says the sheet encloses nothing"
+grep_out "open loops: " "$tmp/out" "rebuild says where the sheet's open loop is"
 expect 0 "rebuild wraps an open sheet in a shell" -- "$bin" rebuild "$tmp/sheet.off" -o "$tmp/sheet_shell.off"
 grep_out "wrapped in a shell" "$tmp/out" "rebuild says the sheet is wrapped"
 expect 2 "rebuild rejects an unknown --sheets" -- "$bin" rebuild --sheets keep "$tmp/sheet.off" -o "$tmp/sheet_x.off"

@@ -314,6 +314,15 @@ TEST_CASE("rebuild: an open sheet beside a solid is wrapped in a shell, or repor
     CHECK(r.lost_area_fraction > 0.05);
     CHECK_FALSE(r.certified);
     CHECK(inspect(result.soup).certified_clean());  // the box itself is fine
+    // ... and where: the sheet's faces and box, and its open loop
+    REQUIRE(r.lost_regions.size() == 1);
+    CHECK(r.lost_regions[0].count == 4);
+    CHECK(r.lost_regions[0].lo == Point3d{5, 0, 0});
+    CHECK(r.lost_regions[0].hi == Point3d{7, 2, 0});
+    REQUIRE(r.open_loops.size() == 1);
+    CHECK(r.open_loops[0].count == 6);  // the 2 x 1 strip of quads: 2 + 1 + 2 + 1 unit edges
+    CHECK(r.open_loops[0].lo == Point3d{5, 0, 0});
+    CHECK(r.open_loops[0].hi == Point3d{7, 2, 0});
   }
 }
 

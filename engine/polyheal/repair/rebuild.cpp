@@ -42,6 +42,33 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 double dot(const Point3d& a, const Point3d& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
+/// Grows g's box to hold p (`first`: the box is p).
+void grow(Region& g, const Point3d& p, bool first) {
+  for (int k = 0; k < 3; ++k) {
+    g.lo[k] = first ? p[k] : std::min(g.lo[k], p[k]);
+    g.hi[k] = first ? p[k] : std::max(g.hi[k], p[k]);
+  }
+}
+
+/// Each boundary loop of `s` (boundary edges joined at shared vertices):
+/// its edge count and bounding box, largest first.
+std::vector<Region> boundary_loop_regions(const Soup& s, const Topology& topo) {
+  UnionFind joined(s.points.size());
+  for (const Edge& e : topo.boundary_edges) joined.unite(e.a, e.b);
+  std::unordered_map<std::size_t, std::size_t> index;  // root -> region
+  std::vector<Region> out;
+  for (const Edge& e : topo.boundary_edges) {
+    const auto [it, added] = index.emplace(joined.find(e.a), out.size());
+    if (added) out.emplace_back();
+    Region& g = out[it->second];
+    grow(g, s.points[e.a], g.count == 0);
+    grow(g, s.points[e.b], false);
+    ++g.count;
+  }
+  std::sort(out.begin(), out.end(), [](const Region& a, const Region& b) { return a.count > b.count; });
+  return out;
+}
+
 /// (b - a) x (c - a): twice the triangle's area vector (doubles; a measurement).
 Point3d normal(const Point3d& a, const Point3d& b, const Point3d& c) {
   const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
@@ -103,6 +130,7 @@ Facets prepare(const Soup& input, RebuildReport& r) {
   for (const Tri& t : f.tris) s.add_triangle(t[0], t[1], t[2]);
   const Topology topo = analyze_topology(s);
   r.boundary_loops = topo.boundary_loops;
+  r.open_loops = boundary_loop_regions(s, topo);
   if (!topo.misoriented_edges.empty()) {
     std::vector<std::vector<std::pair<std::size_t, bool>>> adj(f.tris.size());  // (neighbour, same direction)
     std::unordered_map<std::uint64_t, std::vector<std::pair<std::size_t, bool>>> uses;
@@ -1413,8 +1441,22 @@ Loss measure_loss(const Soup& input, const Soup& written, double far, bool outsi
       lost_area += a;
     }
   }
+  std::vector<std::size_t> region_of(topo.components, std::size_t(-1));
   for (std::size_t c = 0; c < topo.components; ++c)
-    if (!near[c]) ++(absorbed[c] ? loss.absorbed_components : loss.lost_components);
+    if (!near[c]) {
+      ++(absorbed[c] ? loss.absorbed_components : loss.lost_components);
+      if (!absorbed[c]) {
+        region_of[c] = loss.lost_regions.size();
+        loss.lost_regions.emplace_back();
+      }
+    }
+  for (std::size_t f = 0; f < welded.face_count(); ++f) {
+    const std::size_t i = region_of[topo.face_component[f]];
+    if (i == std::size_t(-1)) continue;
+    Region& g = loss.lost_regions[i];
+    for (Index v : welded.face(f)) grow(g, welded.points[v], g.count == 0);
+    ++g.count;
+  }
   if (outside)
     loss.outside_distance = detail::one_sided_distance_skipping(
       input, written, 0.05 * far, [&](const Point3d& p) { return inside_output(p) > 0.5; });
@@ -1444,6 +1486,7 @@ void certify_rebuild(const Soup& input, const Soup& written, RebuildReport& r) {
     r.absorbed_faces = loss.absorbed_faces;
     r.lost_components = loss.lost_components;
     r.lost_area_fraction = loss.lost_area_fraction;
+    r.lost_regions = loss.lost_regions;
   }
   r.certified = r.certified && r.lost_components == 0;
   r.seconds_certify = seconds_since(t0);

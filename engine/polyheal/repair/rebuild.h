@@ -71,12 +71,20 @@ struct RebuildOptions {
   Observer* observer = nullptr;
 };
 
+/// Where something is: how many (edges of a loop, faces of a component)
+/// and their bounding box.
+struct Region {
+  std::size_t count = 0;
+  Point3d lo{}, hi{};
+};
+
 struct RebuildReport {
   // input
   std::size_t faces = 0, vertices = 0, groups = 0;
   std::size_t zero_area_faces = 0;      // left out: they bound nothing
   std::size_t reoriented_faces = 0;     // flipped to agree with their component (inconsistent input)
   std::size_t boundary_loops = 0;       // of the welded input
+  std::vector<Region> open_loops;       // each of them: its edges and where
   std::size_t sheet_facets = 0;         // facets bounding no volume (winding <= 1/2 on both sides)
   std::size_t thin_facets = 0;          // facets of parts thinner than a cell, wrapped in the shell too
   double shell = 0;                     // half-thickness of the shell they are wrapped in (0: none)
@@ -114,6 +122,7 @@ struct RebuildReport {
   std::size_t lost_faces = 0, lost_components = 0;
   std::size_t absorbed_faces = 0;  // far from the output but inside it (inner walls, enclosed parts)
   double lost_area_fraction = 0;
+  std::vector<Region> lost_regions;  // each component lost whole: its faces and where
   // seconds
   double seconds_prepare = 0, seconds_octree = 0, seconds_winding = 0, seconds_extract = 0,
          seconds_simplify = 0, seconds_certify = 0;
@@ -142,6 +151,7 @@ struct Loss {
   std::size_t lost_faces = 0, absorbed_faces = 0;
   std::size_t lost_components = 0, absorbed_components = 0;
   double lost_area_fraction = 0;
+  std::vector<Region> lost_regions;  // per component lost whole
   std::vector<char> absorbed;  // per input face
   double outside_distance = 0; // from the input outside the written volume to the written surface (error 5% of far)
 };
