@@ -28,7 +28,9 @@
 // (or, for a collapse — or with fold_angle, a flip —, leaves fewer bad faces).
 // With fold_angle, no new triangle folds onto a neighbour (new or kept)
 // below it, and a folded face gets every collapse and flip of its edges as
-// candidates: a fold is usually a spike vertex, gone with a collapse.
+// candidates: a fold is usually a spike vertex, gone with a collapse; and
+// a point the operation takes away may be covered by a face it keeps
+// around it (the spike lies on the face it is folded onto).
 // Among the valid operations for a bad face the one leaving the best worst
 // triangle wins; bad faces are treated worst first.
 #pragma once
