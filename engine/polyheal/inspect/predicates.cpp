@@ -246,6 +246,19 @@ bool is_nearly_on_segment(const Point3d& p, const Point3d& a, const Point3d& b, 
   });
 }
 
+bool lies_along_segment(const Point3d& p, const Point3d& a, const Point3d& b, double tol) {
+  return filtered([&](auto nt) {
+    using NT = decltype(nt);
+    const Vec<NT> ab = sub<NT>(b, a), ap = sub<NT>(p, a), bp = sub<NT>(p, b);
+    if (!(dot(ap, ab) > NT(0)) || !(dot(bp, ab) < NT(0))) return false;
+    const NT tol2 = NT(tol) * NT(tol);
+    if (dot(ap, ap) <= tol2 || dot(bp, bp) <= tol2) return false;  // at an end: the same point
+    // distance^2 = |ap x ab|^2 / |ab|^2 <= tol^2
+    const Vec<NT> n = cross(ap, ab);
+    return bool(dot(n, n) <= tol2 * dot(ab, ab));
+  });
+}
+
 bool is_nearly_degenerate(const Point3d& a, const Point3d& b, const Point3d& c, double eps) {
   // Quick reject in doubles: each component of ab x ac is off by at most
   // ~8 eps_mach |ab||ac| <= 1e-14 L^2 (L the longest edge), so a computed

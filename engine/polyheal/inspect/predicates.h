@@ -44,6 +44,11 @@ bool fold_angle_less(const Point3d& p, const Point3d& q, const Point3d& r, const
 /// default) without it being there.
 bool is_nearly_on_segment(const Point3d& p, const Point3d& a, const Point3d& b, double eps);
 
+/// True when p projects strictly between a and b, lies farther than `tol`
+/// from both, and within `tol` of the line ab (absolute; tol 0: exactly on
+/// it): a T-junction vertex of edge ab.
+bool lies_along_segment(const Point3d& p, const Point3d& a, const Point3d& b, double tol);
+
 /// True when triangle abc is not exactly degenerate but its area is tiny
 /// relative to its longest edge: |ab x ac| <= eps * longest_edge^2 (TetGen's
 /// relative collinearity tolerance, eps = 1e-8 by default).

@@ -178,39 +178,56 @@ bool does_self_intersect(const Soup& soup, const SelfIntersectionOptions& option
   return stop.load();
 }
 
-std::vector<VertexNearEdge> find_vertices_near_edges(const Soup& soup, const std::vector<std::array<Index, 2>>& edges,
-                                                     double eps) {
-  // A point within eps |ab| of the segment lies in its box grown by that
-  // much (rounded outward, and a little more for the rounding of |ab|).
+void for_each_point_near_edge(const std::vector<Point3d>& points, const std::vector<std::array<Index, 2>>& edges,
+                              const std::vector<Index>* candidates, const std::function<double(std::size_t)>& grow,
+                              const std::function<void(Index, std::size_t)>& near) {
   std::vector<Box> edge_boxes, point_boxes;
   edge_boxes.reserve(edges.size());
   for (std::size_t i = 0; i < edges.size(); ++i) {
-    const Point3d &a = soup.points[edges[i][0]], &b = soup.points[edges[i][1]];
-    double d2 = 0;
-    for (int c = 0; c < 3; ++c) d2 += (a[c] - b[c]) * (a[c] - b[c]);
-    const double grow = eps * std::sqrt(d2) * (1 + 1e-9);
+    const Point3d &a = points[edges[i][0]], &b = points[edges[i][1]];
+    const double g = grow(i);
     double lo[3], hi[3];
     for (int c = 0; c < 3; ++c) {
-      lo[c] = std::nextafter(std::min(a[c], b[c]) - grow, -std::numeric_limits<double>::infinity());
-      hi[c] = std::nextafter(std::max(a[c], b[c]) + grow, std::numeric_limits<double>::infinity());
+      lo[c] = std::nextafter(std::min(a[c], b[c]) - g, -std::numeric_limits<double>::infinity());
+      hi[c] = std::nextafter(std::max(a[c], b[c]) + g, std::numeric_limits<double>::infinity());
     }
     edge_boxes.emplace_back(lo, hi, static_cast<std::uint32_t>(i));
   }
-  point_boxes.reserve(soup.points.size());
-  for (std::size_t v = 0; v < soup.points.size(); ++v) {
-    double p[3] = {soup.points[v][0], soup.points[v][1], soup.points[v][2]};
+  auto add_point = [&](Index v) {
+    double p[3] = {points[v][0], points[v][1], points[v][2]};
     point_boxes.emplace_back(p, p, static_cast<std::uint32_t>(v));
+  };
+  if (candidates) {
+    point_boxes.reserve(candidates->size());
+    for (Index v : *candidates) add_point(v);
+  } else {
+    point_boxes.reserve(points.size());
+    for (std::size_t v = 0; v < points.size(); ++v) add_point(static_cast<Index>(v));
   }
-  std::vector<VertexNearEdge> out;
   CGAL::box_intersection_d(edge_boxes.begin(), edge_boxes.end(), point_boxes.begin(), point_boxes.end(),
                            [&](const Box& e, const Box& p) {
-                             const std::array<Index, 2>& ab = edges[e.info()];
                              const Index v = static_cast<Index>(p.info());
-                             if (v == ab[0] || v == ab[1]) return;
-                             if (is_nearly_on_segment(soup.points[v], soup.points[ab[0]], soup.points[ab[1]], eps))
-                               out.push_back({v, std::min(ab[0], ab[1]), std::max(ab[0], ab[1])});
+                             if (v != edges[e.info()][0] && v != edges[e.info()][1]) near(v, e.info());
                            },
                            CGAL::Box_intersection_d::Box_traits_d<Box>(), kCutoff);
+}
+
+std::vector<VertexNearEdge> find_vertices_near_edges(const Soup& soup, const std::vector<std::array<Index, 2>>& edges,
+                                                     double eps) {
+  std::vector<VertexNearEdge> out;
+  for_each_point_near_edge(
+      soup.points, edges, nullptr,
+      [&](std::size_t i) {  // within eps |ab| of the segment, and a little more for the rounding of |ab|
+        const Point3d &a = soup.points[edges[i][0]], &b = soup.points[edges[i][1]];
+        double d2 = 0;
+        for (int c = 0; c < 3; ++c) d2 += (a[c] - b[c]) * (a[c] - b[c]);
+        return eps * std::sqrt(d2) * (1 + 1e-9);
+      },
+      [&](Index v, std::size_t i) {
+        const std::array<Index, 2>& ab = edges[i];
+        if (is_nearly_on_segment(soup.points[v], soup.points[ab[0]], soup.points[ab[1]], eps))
+          out.push_back({v, std::min(ab[0], ab[1]), std::max(ab[0], ab[1])});
+      });
   std::sort(out.begin(), out.end());
   return out;
 }

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "polyheal/mesh/soup.h"
@@ -46,6 +47,14 @@ struct VertexNearEdge {
     return vertex != o.vertex ? vertex < o.vertex : a != o.a ? a < o.a : b < o.b;
   }
 };
+
+/// The broad phase of point-near-edge tests: calls near(v, i) for every
+/// point v (of `candidates`, or all of `points` when null) inside edge i's
+/// bounding box grown by grow(i) (rounded outward) that is not one of the
+/// edge's ends. Edges are index pairs into `points`.
+void for_each_point_near_edge(const std::vector<Point3d>& points, const std::vector<std::array<Index, 2>>& edges,
+                              const std::vector<Index>* candidates, const std::function<double(std::size_t)>& grow,
+                              const std::function<void(Index, std::size_t)>& near);
 
 /// Every point of `soup` nearly on (predicates.h is_nearly_on_segment, eps)
 /// one of `edges` (index pairs into soup.points), sorted.

@@ -8,15 +8,15 @@
 #include <CGAL/Polygon_mesh_processing/stitch_borders.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Surface_mesh.h>
-#include <CGAL/box_intersection_d.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <limits>
 #include <numeric>
 #include <unordered_map>
 
+#include "polyheal/inspect/predicates.h"
+#include "polyheal/inspect/self_intersections.h"
 #include "polyheal/mesh/union_find.h"
 #include "polyheal/mesh/weld.h"
 
@@ -106,17 +106,15 @@ bool same_cycle(const std::vector<P3>& pts, const std::vector<std::size_t>& p, c
 
 /// T-junctions: a boundary vertex v within `tol` of the interior of a
 /// boundary edge x-y (of face x-y-c) splits that face into x-v-c, v-y-c (in
-/// order along the edge when several vertices lie on it). Decided exactly:
-/// rational arithmetic on the input doubles, v strictly between x and y in
-/// projection, farther than tol from both, and |(v-x) x (y-x)|^2 <=
-/// tol^2 |y-x|^2 (within tol of the line). The split faces span
-/// the original within tol; no coordinate changes. Faces are split one
-/// boundary edge per pass; passes repeat until nothing splits.
+/// order along the edge when several vertices lie on it). Decided exactly
+/// on the input doubles (predicates.h lies_along_segment: v strictly
+/// between x and y in projection, farther than tol from both, within tol
+/// of the line). The split faces span the original within tol; no
+/// coordinate changes. Faces are split one boundary edge per pass; passes
+/// repeat until nothing splits.
 std::size_t split_t_junctions(const std::vector<Point3d>& pts, std::vector<Tri>& tris,
                               std::vector<std::int64_t>& source, double tol) {
   using Q = CGAL::Exact_rational;
-  using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::size_t, CGAL::Box_intersection_d::ID_EXPLICIT>;
-  const Q tol2 = Q(tol) * Q(tol);
   std::size_t inserted = 0;
   for (int pass = 0; pass < 16; ++pass) {
     std::unordered_map<std::uint64_t, std::pair<std::size_t, int>> once;  // edge -> (face, corner) while used once
@@ -139,48 +137,16 @@ std::size_t split_t_junctions(const std::vector<Point3d>& pts, std::vector<Tri>&
     std::sort(border_vertices.begin(), border_vertices.end());
     border_vertices.erase(std::unique(border_vertices.begin(), border_vertices.end()), border_vertices.end());
 
-    // Broad phase: edge boxes grown by tol (rounded outward) against points.
-    auto down = [&](double x) { return std::nextafter(x - tol, -std::numeric_limits<double>::infinity()); };
-    auto up = [&](double x) { return std::nextafter(x + tol, std::numeric_limits<double>::infinity()); };
-    std::vector<Box> edge_boxes, point_boxes;
-    for (std::size_t i = 0; i < border.size(); ++i) {
-      const Tri& t = tris[border[i].first];
-      const Point3d &a = pts[t[border[i].second]], &b = pts[t[(border[i].second + 1) % 3]];
-      double lo[3], hi[3];
-      for (int c = 0; c < 3; ++c) {
-        lo[c] = down(std::min(a[c], b[c]));
-        hi[c] = up(std::max(a[c], b[c]));
-      }
-      edge_boxes.emplace_back(lo, hi, i);
-    }
-    for (Index v : border_vertices) {
-      double p[3] = {pts[v][0], pts[v][1], pts[v][2]};
-      point_boxes.emplace_back(p, p, std::size_t(v));
-    }
+    std::vector<std::array<Index, 2>> edges;
+    for (const auto& [f, k] : border) edges.push_back({tris[f][k], tris[f][(k + 1) % 3]});
     std::vector<std::vector<Index>> on_edge(border.size());
-    CGAL::box_intersection_d(edge_boxes.begin(), edge_boxes.end(), point_boxes.begin(), point_boxes.end(),
-                             [&](const Box& eb, const Box& pb) {
-                               const Tri& t = tris[border[eb.info()].first];
-                               const Index v = Index(pb.info());
-                               if (v == t[0] || v == t[1] || v == t[2]) return;
-                               const int k = border[eb.info()].second;
-                               const Point3d &x = pts[t[k]], &y = pts[t[(k + 1) % 3]], &p = pts[v];
-                               Q d[3], w[3];
-                               for (int c = 0; c < 3; ++c) {
-                                 d[c] = Q(y[c]) - Q(x[c]);
-                                 w[c] = Q(p[c]) - Q(x[c]);
-                               }
-                               const Q along = w[0] * d[0] + w[1] * d[1] + w[2] * d[2];
-                               const Q len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                               if (!(along > 0) || !(along < len2)) return;
-                               // Within tol of an end: the same point (the near weld merges those).
-                               const Q to_x = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
-                               const Q to_y = to_x - 2 * along + len2;  // |w - d|^2
-                               if (to_x <= tol2 || to_y <= tol2) return;
-                               const Q cx = w[1] * d[2] - w[2] * d[1], cy = w[2] * d[0] - w[0] * d[2],
-                                       cz = w[0] * d[1] - w[1] * d[0];
-                               if (cx * cx + cy * cy + cz * cz <= tol2 * len2) on_edge[eb.info()].push_back(v);
-                             });
+    for_each_point_near_edge(
+        pts, edges, &border_vertices, [&](std::size_t) { return tol; },
+        [&](Index v, std::size_t i) {
+          const Index opposite = tris[border[i].first][(border[i].second + 2) % 3];
+          if (v != opposite && lies_along_segment(pts[v], pts[edges[i][0]], pts[edges[i][1]], tol))
+            on_edge[i].push_back(v);
+        });
 
     std::vector<char> split(tris.size(), 0);
     std::size_t before = inserted;
