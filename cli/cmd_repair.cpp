@@ -263,7 +263,8 @@ void add_repair(CLI::App& app, int& exit_code) {
   cmd->add_flag("--drop-enclosed", args->drop_enclosed,
                 "accept dropping components that lie inside the output's volume (inner parts) with exit 0");
   cmd->add_option("--for", args->for_tool,
-                  "tetgen: also require TetGen's tolerances (no fold below 0.1 deg, no nearly collinear face), "
+                  "tetgen: also require TetGen's tolerances (no fold below 0.1 deg, no nearly collinear face, no "
+                  "vertex nearly on an edge it is not on), "
                   "and write OUT.smesh for tetgen -p")
       ->check(CLI::IsMember({"tetgen"}));
   cmd->add_option("--certificate", args->certificate,

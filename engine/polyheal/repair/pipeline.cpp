@@ -3,8 +3,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <optional>
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
@@ -46,14 +46,7 @@ struct State {
 /// tetrahedron fails the link condition). `dropped` counts them.
 Soup without_tiny_flagged_components(const Soup& s, const Report& r, double size, std::size_t& dropped) {
   dropped = 0;
-  const Weld weld = weld_identical_points(s.points);
-  Soup welded;
-  welded.points = s.points;
-  for (std::size_t f = 0; f < s.face_count(); ++f) {
-    std::vector<Index> v;
-    for (Index i : s.face(f)) v.push_back(weld.representative[i]);
-    welded.add_face(v.begin(), v.end());
-  }
+  const Soup welded = apply_weld(s, weld_identical_points(s.points));
   const Topology t = analyze_topology(welded);
   std::vector<char> flagged(t.components, 0), open(t.components, 0);
   for (const FacePair& p : r.sharp_folds) flagged[t.face_component[p.first]] = 1;
@@ -63,16 +56,11 @@ Soup without_tiny_flagged_components(const Soup& s, const Report& r, double size
     for (Index i : welded.face(f)) vertex_face[i] = f;
   for (const VertexNearEdge& v : r.vertices_near_edges) flagged[t.face_component[vertex_face[v.vertex]]] = 1;
   for (const Edge& e : t.boundary_edges) open[t.face_component[e.uses.front().face]] = 1;
-  std::vector<std::array<double, 6>> box(t.components, {HUGE_VAL, HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, -HUGE_VAL});
-  for (std::size_t f = 0; f < s.face_count(); ++f)
-    for (Index i : s.face(f))
-      for (int c = 0; c < 3; ++c) {
-        box[t.face_component[f]][c] = std::min(box[t.face_component[f]][c], s.points[i][c]);
-        box[t.face_component[f]][c + 3] = std::max(box[t.face_component[f]][c + 3], s.points[i][c]);
-      }
+  const std::vector<Region> regions = component_regions(welded, t);
   std::vector<char> drop(t.components, 0);
   for (std::size_t c = 0; c < t.components; ++c) {
-    const double dx = box[c][3] - box[c][0], dy = box[c][4] - box[c][1], dz = box[c][5] - box[c][2];
+    const Region& g = regions[c];
+    const double dx = g.hi[0] - g.lo[0], dy = g.hi[1] - g.lo[1], dz = g.hi[2] - g.lo[2];
     drop[c] = flagged[c] && !open[c] && std::sqrt(dx * dx + dy * dy + dz * dz) <= size;
     dropped += drop[c];
   }
@@ -124,7 +112,7 @@ class Pipeline {
     }
     // TetGen's tolerances (for_tetgen): nearly degenerate faces and sharp
     // folds on a surface that is otherwise clean, before the grid is tried.
-    if (o_.for_tetgen && wanted(kStepDegenerate) && !done() && cur_.report.certified_clean()) tetgen_shapes();
+    if (tetgen_pass_due()) tetgen_shapes();
     if (wanted(kStepRebuild) && !done()) {
       // The grid's coarsening and feature placement can fold faces below
       // TetGen's angle or leave a vertex nearly on an edge; the grid surface
@@ -132,10 +120,10 @@ class Pipeline {
       // long: collapses may move it that far again. What they cannot fix,
       // the grid without coarsening (more faces) usually avoids.
       const double cell = rebuild(true);
-      if (o_.for_tetgen && wanted(kStepDegenerate) && !done() && cur_.report.certified_clean()) tetgen_shapes(cell);
+      if (tetgen_pass_due()) tetgen_shapes(cell);
       if (o_.for_tetgen && !done()) {
         rebuild(false);
-        if (wanted(kStepDegenerate) && !done() && cur_.report.certified_clean()) tetgen_shapes(cell);
+        if (tetgen_pass_due()) tetgen_shapes(cell);
       }
     }
     result_.soup = std::move(cur_.soup);
@@ -146,6 +134,10 @@ class Pipeline {
  private:
   bool wanted(RepairStep s) const { return (o_.steps & s) != 0; }
   bool done() const { return certified(cur_.report, o_.for_tetgen); }
+  /// For TetGen: a clean surface its tolerances would still stop.
+  bool tetgen_pass_due() const {
+    return o_.for_tetgen && wanted(kStepDegenerate) && !done() && cur_.report.certified_clean();
+  }
 
   State inspected(Soup soup) const {
     State s;

@@ -1394,6 +1394,16 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   return result;
 }
 
+std::vector<Region> component_regions(const Soup& welded, const Topology& topo) {
+  std::vector<Region> regions(topo.components);
+  for (std::size_t f = 0; f < welded.face_count(); ++f) {
+    Region& g = regions[topo.face_component[f]];
+    for (Index v : welded.face(f)) grow(g, welded.points[v], g.count == 0);
+    ++g.count;
+  }
+  return regions;
+}
+
 Loss measure_loss(const Soup& input, const Soup& written, double far, bool outside) {
   Loss loss;
   const Soup welded = apply_weld(input, weld_identical_points(input.points));
@@ -1441,22 +1451,12 @@ Loss measure_loss(const Soup& input, const Soup& written, double far, bool outsi
       lost_area += a;
     }
   }
-  std::vector<std::size_t> region_of(topo.components, std::size_t(-1));
+  const std::vector<Region> regions = component_regions(welded, topo);
   for (std::size_t c = 0; c < topo.components; ++c)
     if (!near[c]) {
       ++(absorbed[c] ? loss.absorbed_components : loss.lost_components);
-      if (!absorbed[c]) {
-        region_of[c] = loss.lost_regions.size();
-        loss.lost_regions.emplace_back();
-      }
+      if (!absorbed[c]) loss.lost_regions.push_back(regions[c]);
     }
-  for (std::size_t f = 0; f < welded.face_count(); ++f) {
-    const std::size_t i = region_of[topo.face_component[f]];
-    if (i == std::size_t(-1)) continue;
-    Region& g = loss.lost_regions[i];
-    for (Index v : welded.face(f)) grow(g, welded.points[v], g.count == 0);
-    ++g.count;
-  }
   if (outside)
     loss.outside_distance = detail::one_sided_distance_skipping(
       input, written, 0.05 * far, [&](const Point3d& p) { return inside_output(p) > 0.5; });

@@ -78,6 +78,12 @@ struct Region {
   Point3d lo{}, hi{};
 };
 
+struct Topology;
+
+/// Each connected component of `welded` (by topo.face_component): its face
+/// count and bounding box.
+std::vector<Region> component_regions(const Soup& welded, const Topology& topo);
+
 struct RebuildReport {
   // input
   std::size_t faces = 0, vertices = 0, groups = 0;
