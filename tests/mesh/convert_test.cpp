@@ -110,3 +110,31 @@ TEST_CASE("convert: pinch copies share one identity, every other vertex, old or 
   const vertex_descriptor added = m.add_vertex(Point(5, 5, 5));
   CHECK(vertex_identity(identity, added) == static_cast<std::uint32_t>(added));
 }
+
+TEST_CASE("convert: a new edge to a pinch copy duplicates its twin's edge in the file", "[mesh]") {
+  // Two tetrahedra touching at the origin: copies o1 (first fan) and o2.
+  // An edge o2-w to a neighbour w of o1 welds onto o1-w in the file.
+  const Soup touching = test::concat(test::tetrahedron(), test::tetrahedron(-1, 0, 0));
+  Mesh m;
+  REQUIRE(soup_to_mesh_splitting_pinches(touching, m).ok);
+  mark_split_pinches(m);
+  const auto identity = vertex_identity_map(m);
+  const PinchCopies copies = pinch_copies(m);
+  REQUIRE(copies.size() == 1);
+  const std::vector<vertex_descriptor>& o = copies.begin()->second;
+  REQUIRE(o.size() == 2);  // the welded-away twin of the origin is isolated: not a copy
+  for (int k = 0; k < 2; ++k) {
+    const vertex_descriptor own = o[k], twin = o[1 - k];
+    for (vertex_descriptor w : CGAL::vertices_around_target(m.halfedge(own), m)) {
+      CHECK_FALSE(copies_share_edge(m, identity, copies, own, w));  // the edge itself
+      CHECK(copies_share_edge(m, identity, copies, twin, w));
+      CHECK(copies_share_edge(m, identity, copies, w, twin));
+    }
+  }
+  // Without split pinches nothing is shared.
+  Mesh plain;
+  REQUIRE(soup_to_mesh(test::tetrahedron(), plain).ok);
+  const vertex_descriptor v = *plain.vertices().begin();
+  for (vertex_descriptor w : CGAL::vertices_around_target(plain.halfedge(v), plain))
+    CHECK_FALSE(copies_share_edge(plain, vertex_identity_map(plain), pinch_copies(plain), v, w));
+}

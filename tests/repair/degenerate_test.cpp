@@ -4,6 +4,7 @@
 // each checked here independently of the pipeline's own report.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
@@ -207,6 +208,47 @@ TEST_CASE("degenerate: collapses never join two pinch copies' edges (the file's 
   const Soup out = read_soup(path);
   CHECK(topology_of(inspect(out)) == before);
   CHECK(result.report.topology_out == result.report.topology_in);
+}
+
+TEST_CASE("degenerate: where the input self-intersects, nothing is cut and no pair is added", "[repair][degenerate]") {
+  // trimesh's idler_riser as exported (CAD STL: 374 needles, 58 intersecting
+  // pairs). No repair may touch an intersection, and slicing the faces that
+  // intersect only multiplied the pairs (58 -> 1443) and left needles nothing
+  // could remove (374 -> 967, faces 1572 -> 4763). Now every face that
+  // intersects in the output is an input face, unchanged, and its partner
+  // intersected it in the input; every bad face left is listed.
+  const Soup in = read_soup(test::fixture("corpus/trimesh__idler_riser.STL"));
+  const Report before = inspect(in);
+  REQUIRE_FALSE(before.self_intersections.empty());
+  const DegenerateResult result = remove_degenerate_faces(in);
+  const std::string path = test::scratch("degenerate_idler_riser.off");
+  write_soup(result.soup, path);
+  const Soup out = read_soup(path);
+  const Report after = inspect(out);
+  auto corners = [](const Soup& s, std::size_t f) {
+    std::vector<Point3d> c;
+    for (Index v : s.face(f)) c.push_back(s.points[v]);
+    std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+    return c;
+  };
+  std::map<std::vector<Point3d>, std::size_t> input_face;
+  for (std::size_t f = 0; f < in.face_count(); ++f) input_face.emplace(corners(in, f), f);
+  std::set<std::pair<std::size_t, std::size_t>> pairs_in;
+  for (const FacePair& p : before.self_intersections) pairs_in.insert({p.first, p.second});
+  for (const FacePair& p : after.self_intersections) {
+    const auto a = input_face.find(corners(out, p.first)), b = input_face.find(corners(out, p.second));
+    REQUIRE(a != input_face.end());
+    REQUIRE(b != input_face.end());
+    CHECK(pairs_in.count({std::min(a->second, b->second), std::max(a->second, b->second)}) == 1);
+  }
+  CHECK(after.self_intersections.size() <= before.self_intersections.size());
+  CHECK(topology_of(after) == topology_of(before));
+  CHECK(out.face_count() <= in.face_count());
+  const std::size_t bad_in = before.degenerate_faces.size() + before.caps.size() + before.needles.size();
+  const std::size_t bad_out = after.degenerate_faces.size() + after.caps.size() + after.needles.size();
+  CHECK(bad_out < bad_in / 2);
+  CHECK(result.report.leftovers.size() == bad_out);
+  CHECK(result.report.hausdorff + result.report.hausdorff_error_bound <= result.report.tolerance);
 }
 
 TEST_CASE("degenerate with a fold angle: a spike folded onto its neighbours is collapsed (repair --for tetgen)",

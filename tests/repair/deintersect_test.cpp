@@ -269,6 +269,25 @@ TEST_CASE("deintersect: a CAD STL with pinch vertices keeps them and comes out i
   for (const Point3d& p : pinches_in) CHECK(points_out.count(p) == 1);
 }
 
+TEST_CASE("deintersect: a swap never joins two pinch copies' edges (the file's topology stays)",
+          "[repair][deintersect]") {
+  // V-HACD's shark_b (42 pinch points, 20 intersecting pairs): a swap made
+  // an edge c-d while another copy of c's point already had an edge to d's;
+  // welded in the file, that was one edge of three faces: components 5 -> 4,
+  // Euler -57 -> -56, two non-manifold edges.
+  const Soup in = read_soup(test::fixture("corpus/vhacd__shark_b.off"));
+  const Report before = inspect(in);
+  REQUIRE_FALSE(before.nonmanifold_vertices.empty());
+  REQUIRE_FALSE(before.self_intersections.empty());
+  const DeintersectResult result = remove_self_intersections(in);
+  const Report after = inspect(written(result, "deintersect_shark_b.off"));
+  CHECK(result.report.swaps > 0);
+  CHECK(after.self_intersections.size() < before.self_intersections.size());
+  CHECK(topology_of(after) == topology_of(before));
+  CHECK(after.nonmanifold_edges.empty());
+  CHECK(result.report.topology_out == result.report.topology_in);
+}
+
 TEST_CASE("deintersect: faces it cannot free are reported, never hidden", "[repair][deintersect]") {
   // Two spheres crossing deeply: no local move frees them. Whatever is left
   // must be exactly what the oracle finds in the written file.
@@ -315,12 +334,43 @@ TEST_CASE("deintersect: operations tried and retracted leave no trace", "[repair
   o.max_displacement = -1;  // the default limit
   o.clearance_mode = ClearanceMode::tet_aspect;
   o.clearance = 5;
+  o.pair_rounds = false;  // they find swaps that lower the pair count
   const DeintersectResult result = remove_self_intersections(in, o);
   REQUIRE(result.report.trials > 0);
   REQUIRE(result.report.swaps + result.report.lifts == 0);
   CHECK(result.soup.points == in.points);
   CHECK(result.soup.indices == in.indices);
   CHECK(result.report.faces_changed == 0);
+}
+
+TEST_CASE("deintersect: rounds by pairs only ever lower (faces, pairs), and end", "[repair][deintersect]") {
+  // The tube at edge 4.0 with a clearance of a fifth of the edge: no swap or
+  // lift frees a face (§4.1), but swaps lower the pair count. With the pair
+  // rounds on, operations are kept, the faces left are no more than
+  // without them, and the pairs fewer.
+  const Soup in = read_soup(test::fixture("tube_edge4.0.off"));
+  DeintersectOptions o = only(&DeintersectOptions::swap);
+  o.lift = true;
+  o.max_displacement = -1;
+  o.clearance_mode = ClearanceMode::tet_aspect;
+  o.clearance = 5;
+  o.pair_rounds = false;
+  const DeintersectResult paper = remove_self_intersections(in, o);
+  o.pair_rounds = true;
+  const DeintersectResult ours = remove_self_intersections(in, o);
+  REQUIRE(paper.report.swaps + paper.report.lifts == 0);
+  CHECK(ours.report.pair_rounds > 0);
+  CHECK(ours.report.swaps + ours.report.lifts > 0);
+  CHECK(ours.report.rounds < o.max_rounds);  // ended because nothing applied
+  const Report before = inspect(in), after = inspect(written(ours, "deintersect_pair_rounds.off"));
+  const auto faces_of = [](const Report& r) {
+    std::set<std::size_t> f;
+    for (const FacePair& p : r.self_intersections) f.insert({p.first, p.second});
+    return f.size();
+  };
+  CHECK(faces_of(after) <= faces_of(before));
+  CHECK(after.self_intersections.size() < before.self_intersections.size());
+  CHECK(topology_of(after) == topology_of(before));
 }
 
 TEST_CASE("deintersect: a non-manifold soup is refused", "[repair][deintersect]") {

@@ -121,6 +121,29 @@ void mark_split_pinches(Mesh& mesh) {
       }
 }
 
+PinchCopies pinch_copies(const Mesh& mesh) {
+  PinchCopies copies;
+  const auto identity = vertex_identity_map(mesh);
+  const auto pinned = vertex_pinned_map(mesh);
+  if (!identity) return copies;
+  for (vertex_descriptor v : mesh.vertices())
+    if (!mesh.is_isolated(v) && (vertex_identity(identity, v) != static_cast<std::uint32_t>(v) || (pinned && (*pinned)[v])))
+      copies[vertex_identity(identity, v)].push_back(v);
+  return copies;
+}
+
+bool copies_share_edge(const Mesh& mesh, const std::optional<VertexIdentityMap>& identity,
+                       const PinchCopies& copies, vertex_descriptor v, vertex_descriptor w) {
+  if (!identity) return false;
+  const std::uint32_t iv = vertex_identity(identity, v);
+  const auto it = copies.find(vertex_identity(identity, w));
+  const std::vector<vertex_descriptor> own{w};
+  for (vertex_descriptor w2 : it != copies.end() ? it->second : own)
+    for (vertex_descriptor x : CGAL::vertices_around_target(mesh.halfedge(w2), mesh))
+      if (vertex_identity(identity, x) == iv && !(w2 == w && x == v)) return true;
+  return false;
+}
+
 namespace {
 
 MeshBuildResult build_mesh(const Soup& input, Mesh& mesh, bool weld_points) {

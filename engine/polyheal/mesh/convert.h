@@ -1,7 +1,10 @@
 // polyheal — soup <-> Surface_mesh.
 #pragma once
 
+#include <cstdint>
+#include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "polyheal/mesh/mesh.h"
@@ -34,6 +37,22 @@ MeshBuildResult soup_to_mesh_splitting_pinches(const Soup& soup, Mesh& mesh, std
 /// the oracle treats them as the single vertex they are in the file. Does
 /// nothing when no point was split.
 void mark_split_pinches(Mesh& mesh);
+
+/// The copies of each split pinch point, by their kVertexIdentity; empty
+/// when the mesh has none. Copies are pinned, so the lists stay valid while
+/// repairs add and remove other vertices.
+using PinchCopies = std::unordered_map<std::uint32_t, std::vector<vertex_descriptor>>;
+PinchCopies pinch_copies(const Mesh& mesh);
+
+/// Is there an edge, other than v-w itself, between a copy of v's point and
+/// a copy of w's? In the file the copies of a pinch point are one vertex, so
+/// a new edge v-w would duplicate that edge: welded, two boundary edges
+/// become one interior edge (or a third face joins an edge), the point's
+/// fans merge, and the written file's topology changes though the mesh's
+/// does not (found on angle_block.STL by degenerate's collapses, on
+/// shark_b.off by deintersect's swaps). False when nothing was split.
+bool copies_share_edge(const Mesh& mesh, const std::optional<VertexIdentityMap>& identity,
+                       const PinchCopies& copies, vertex_descriptor v, vertex_descriptor w);
 
 /// p with each exact coordinate rounded to the nearest double (ties to even).
 Point3d nearest_point3d(const Point& p);

@@ -107,9 +107,7 @@ class Pipeline {
           normal[axis] = 1;
           const Kernel::Plane_3 plane{Kernel::FT(normal[0]), Kernel::FT(normal[1]), Kernel::FT(normal[2]),
                                       -Kernel::FT(at)};
-          detail::SliceOptions so;
-          so.snap_distance = snap_;
-          so.cap_angle = o_.cap_angle;
+          const detail::SliceOptions so = slice_options();
           const detail::SliceResult s = detail::slice_by_plane(mesh_, plane, so);
           if (s.rejected) continue;
           after_slice(s);
@@ -135,9 +133,7 @@ class Pipeline {
       if (o_.observer && total > 0) o_.observer->progress(std::min(1.0, double(k) / double(total)));
       if (mesh_.is_removed(cap) || classify_face(mesh_, cap, cos_cap_, cos_needle_) != Shape::cap) continue;
       if (static_cast<std::size_t>(cap) < refused.size() && refused[static_cast<std::size_t>(cap)]) continue;
-      detail::SliceOptions so;
-      so.snap_distance = snap_;
-      so.cap_angle = o_.cap_angle;
+      detail::SliceOptions so = slice_options();
       if (!o_.global_slices) so.seed = cap;
       const Kernel::Plane_3 plane = detail::cap_plane(mesh_, cap, so);
       // Local mode cuts short first: across the cap and its neighbours,
@@ -209,9 +205,7 @@ class Pipeline {
       const Point mid(CGAL::to_double(CGAL::midpoint(p, q).x()), CGAL::to_double(CGAL::midpoint(p, q).y()),
                       CGAL::to_double(CGAL::midpoint(p, q).z()));
       if (p == q) continue;
-      detail::SliceOptions so;
-      so.snap_distance = snap_;
-      so.cap_angle = o_.cap_angle;
+      detail::SliceOptions so = slice_options();
       so.seed = needle;
       so.protected_vertices = {mesh_.source(longest), mesh_.target(longest)};
       // A short cut: across the needle and its neighbours, not around the
@@ -240,6 +234,13 @@ class Pipeline {
     r_.flips = decimator_.stats().flips;
   }
 
+  /// Input faces (by id) that intersect another: slices leave them whole
+  /// (SliceOptions::frozen).
+  void freeze(const std::vector<FacePair>& intersecting, std::size_t faces) {
+    frozen_.assign(faces, 0);
+    for (const FacePair& p : intersecting) frozen_[p.first] = frozen_[p.second] = 1;
+  }
+
   void note_size() { r_.peak_faces = std::max<std::size_t>(r_.peak_faces, mesh_.number_of_faces()); }
 
  private:
@@ -250,6 +251,15 @@ class Pipeline {
     d.tolerance = r.tolerance;
     d.fold_angle = o.fold_angle;
     return d;
+  }
+
+  /// Snapping, the safeguard's cap angle, and the faces no slice may cut.
+  detail::SliceOptions slice_options() const {
+    detail::SliceOptions so;
+    so.snap_distance = snap_;
+    so.cap_angle = o_.cap_angle;
+    so.frozen = &frozen_;
+    return so;
   }
 
   void after_slice(const detail::SliceResult& s) {
@@ -276,6 +286,7 @@ class Pipeline {
   detail::ShapeDecimator decimator_;
   double cos_cap_ = 0, cos_needle_ = 0, snap_ = 0;
   std::size_t face_limit_ = 0;  // needle supersampling stops beyond it
+  std::vector<char> frozen_;    // by input face id: intersects another face
 };
 
 }  // namespace
@@ -297,7 +308,9 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   r.before = shape_counts(in);
   r.self_intersections_in = in.self_intersections.size();
   const Soup clean = preprocess(input, r.repeated_index_faces);
-  r.topology_in = r.repeated_index_faces ? topology_of(inspect(clean, inspect_options(o))) : topology_of(in);
+  const Report in_clean = r.repeated_index_faces ? inspect(clean, inspect_options(o)) : Report{};
+  const Report& in_mesh = r.repeated_index_faces ? in_clean : in;  // face ids as in the mesh's kFaceOrigin
+  r.topology_in = topology_of(in_mesh);
   r.bbox_diagonal = bbox_diagonal(in);
   r.tolerance = o.tolerance >= 0 ? o.tolerance : o.tolerance_ratio * r.bbox_diagonal;
   if (!clean.is_triangle_soup()) throw UnsupportedInput("not a triangle mesh (polygons with more than 3 corners)");
@@ -313,6 +326,7 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   mark_split_pinches(mesh);  // the copies must stay, and are one vertex to the oracle
   const detail::SurfaceDistance distance(clean);
   Pipeline pipeline(mesh, distance, o, r);
+  pipeline.freeze(in_mesh.self_intersections, clean.face_count());
   r.seconds_preprocess = seconds_since(t0);
   pipeline.note_size();
 
@@ -381,9 +395,24 @@ void certify(const Soup& input, const Soup& written, DegenerateReport& r) {
   r.self_intersections_out = out.self_intersections.size();
   r.topology_out = topology_of(out);
   r.leftovers.clear();
+  std::vector<char> intersecting(out.faces, 0), beside(written.points.size(), 0);
+  for (const FacePair& p : out.self_intersections)
+    for (std::size_t f : {p.first, p.second}) {
+      intersecting[f] = 1;
+      for (Index v : written.face(f)) beside[v] = 1;
+    }
+  auto is_beside = [&](std::size_t f) {
+    return std::any_of(written.face(f).begin(), written.face(f).end(), [&](Index v) { return beside[v] != 0; });
+  };
   auto why = [&](std::size_t f, const char* unfixable) {
     const bool rounding = f < r.exact_bad.size() && !r.exact_bad[f];
-    return std::string(rounding ? "made by rounding exact coordinates to doubles" : unfixable);
+    if (rounding) return std::string("made by rounding exact coordinates to doubles");
+    if (intersecting[f])  // no operation may touch an intersection, no slice cut it
+      return std::string("it intersects another face, as in the input: run deintersect or repair first");
+    if (is_beside(f))
+      return std::string("beside faces that intersect, as in the input (no slice may cut them): run deintersect "
+                         "or repair first");
+    return std::string(unfixable);
   };
   for (std::size_t f : out.degenerate_faces)
     r.leftovers.push_back({f, "zero-area", why(f, "no flip or collapse within the tolerance is valid")});

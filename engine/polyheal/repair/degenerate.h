@@ -19,7 +19,10 @@
 //                   the paper does. By default the needles a slice leaves are
 //                   decimated right after it (the paper's §7 future work:
 //                   "decimating along the intersection curve after each
-//                   slicing").
+//                   slicing"). No slice cuts a face that intersects another
+//                   in the input (SliceOptions::frozen): nothing may touch an
+//                   intersection, so its pieces would only add pairs and
+//                   needles.
 //   4. decimation   needles and whatever slicing could not remove go by
 //                   collapses and flips within the tolerance (§5). A needle
 //                   no operation can remove (the side of a thin strip) gets

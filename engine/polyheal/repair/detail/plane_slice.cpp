@@ -21,7 +21,7 @@ class Slicer {
     classify_vertices();
     apply_safeguard();
     const std::vector<face_descriptor> faces = faces_to_cut();
-    if (o_.verify && !plan_is_safe(faces)) {
+    if (cuts_frozen(faces) || (o_.verify && !plan_is_safe(faces))) {
       result_.rejected = true;
       return std::move(result_);
     }
@@ -140,6 +140,17 @@ class Slicer {
     // Faces the search took in that snapping has since left uncut are
     // skipped by the plan and by cut_face (they have no two cut corners).
     return out;
+  }
+
+  bool cuts_frozen(const std::vector<face_descriptor>& faces) const {
+    if (!o_.frozen || !origin_) return false;
+    for (face_descriptor f : faces) {
+      const std::int64_t i = (*origin_)[f];
+      if (i >= 0 && static_cast<std::size_t>(i) < o_.frozen->size() && (*o_.frozen)[static_cast<std::size_t>(i)] &&
+          is_cut(f))
+        return true;
+    }
+    return false;
   }
 
   // The pieces cut_face() will make, computed without touching the mesh, each

@@ -55,6 +55,12 @@ struct SliceOptions {
   /// vertices are off the plane by up to snap_distance or, for the
   /// safeguard, up to |e| sin(180° - cap_angle).
   bool verify = true;
+  /// By input face id (kFaceOrigin), faces no slice may cut — those that
+  /// intersect another face in the input: no repair may touch an
+  /// intersection, so their pieces would only multiply the intersecting
+  /// pairs and leave needles nothing can remove. A slice that would cut one
+  /// is refused (mesh untouched). Null: none.
+  const std::vector<char>* frozen = nullptr;
 };
 
 struct SliceResult {

@@ -13,6 +13,7 @@
 
 #include "polyheal/inspect/exact_predicates.h"
 #include "polyheal/inspect/local_index.h"
+#include "polyheal/mesh/convert.h"
 #include "polyheal/repair/detail/distance.h"
 
 namespace polyheal::detail {
@@ -64,7 +65,7 @@ struct ShapeDecimator::Impl {
   FaceFlagMap on_input;
   std::optional<Mesh::Property_map<vertex_descriptor, char>> pinned;  // kVertexPinned, if present
   std::optional<VertexIdentityMap> identity;                          // kVertexIdentity, if present
-  std::unordered_map<std::uint32_t, std::vector<vertex_descriptor>> copies;  // pinch identity -> its copies
+  PinchCopies copies;  // pinch identity -> its copies
   std::vector<char> sticky;  // by vertex index: split points of the slice being tidied
   bool is_sticky(vertex_descriptor v) const {
     return static_cast<std::size_t>(v) < sticky.size() && sticky[static_cast<std::size_t>(v)];
@@ -76,13 +77,10 @@ struct ShapeDecimator::Impl {
       : mesh(m), index(i), input(d), o(opt), on_input(face_on_input_map(m)),
         pinned(vertex_pinned_map(m)),
         identity(vertex_identity_map(m)),
+        copies(pinch_copies(m)),
         approx_point(m.add_property_map<vertex_descriptor, Point3d>(
                           "v:polyheal_approx", Point3d{std::nan(""), 0.0, 0.0}).first) {
     cos_cap = cos_degrees(o.cap_angle);
-    if (identity)  // pinch copies are pinned: the list stays valid
-      for (vertex_descriptor v : m.vertices())
-        if (vertex_identity(identity, v) != static_cast<std::uint32_t>(v) || (pinned && (*pinned)[v]))
-          copies[vertex_identity(identity, v)].push_back(v);
     cos_needle = cos_degrees(o.needle_angle);
     cos_fold = cos_degrees(o.fold_angle);
     // Sampling can miss the farthest point by a little: decide at 70% of the
@@ -313,23 +311,11 @@ struct ShapeDecimator::Impl {
     return best;
   }
 
-  /// Would new edges from v to `gained` duplicate an edge of the file? In
-  /// the file the copies of a pinch point (kVertexIdentity) are one vertex,
-  /// so an edge v-w duplicates any edge between a copy of v and a copy of w:
-  /// welded, two boundary edges become one interior edge, the point's fans
-  /// merge, and the written file's topology changes though the mesh's does
-  /// not (found on trimesh's angle_block.STL: Euler -37 -> -30).
+  /// Would new edges from v to `gained` duplicate an edge of the file
+  /// (copies_share_edge: pinch copies are one vertex there)?
   bool joins_copies(vertex_descriptor v, const std::vector<vertex_descriptor>& gained) const {
-    if (!identity) return false;
-    const std::uint32_t iv = vertex_identity(identity, v);
-    for (vertex_descriptor w : gained) {
-      const std::uint32_t iw = vertex_identity(identity, w);
-      const auto it = copies.find(iw);
-      const std::vector<vertex_descriptor> ws = it != copies.end() ? it->second : std::vector<vertex_descriptor>{w};
-      for (vertex_descriptor w2 : ws)
-        for (vertex_descriptor x : CGAL::vertices_around_target(mesh.halfedge(w2), mesh))
-          if (vertex_identity(identity, x) == iv && !(w2 == w && x == v)) return true;
-    }
+    for (vertex_descriptor w : gained)
+      if (copies_share_edge(mesh, identity, copies, v, w)) return true;
     return false;
   }
 
