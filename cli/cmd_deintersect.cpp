@@ -86,7 +86,6 @@ nlohmann::json to_json(const DeintersectArgs& a, const DeintersectReport& r, dou
       {"operations", {{"swaps", r.swaps}, {"hammers", r.hammers}, {"lifts", r.lifts}, {"trials", r.trials},
                       {"stale", r.stale}}},
       {"rounds", r.rounds},
-      {"pair_rounds", r.pair_rounds},
       {"topology", {{"input", topology_json(r.topology_in)}, {"output", topology_json(r.topology_out)}}},
       {"faces_changed", r.faces_changed},
       {"moved_vertices", r.moved_vertices},
@@ -114,8 +113,8 @@ void print_text(const DeintersectArgs& a, const DeintersectReport& r) {
   else std::printf(" %g\n", r.clearance);
   std::printf("  intersecting faces: %zu -> %zu (pairs %zu -> %zu)\n", r.intersecting_faces_in, r.intersecting_faces_out,
               r.intersecting_pairs_in, r.intersecting_pairs_out);
-  std::printf("  operations: %zu swaps, %zu hammers, %zu lifts in %d rounds, %d by pairs (%zu trials, %zu stale)\n",
-              r.swaps, r.hammers, r.lifts, r.rounds, r.pair_rounds, r.trials, r.stale);
+  std::printf("  operations: %zu swaps, %zu hammers, %zu lifts in %d rounds (%zu trials, %zu stale)\n", r.swaps,
+              r.hammers, r.lifts, r.rounds, r.trials, r.stale);
   std::printf("  moved %zu vertices: max %.6g (%.3g%% of the bbox diagonal), mean %.6g; %zu faces changed\n",
               r.moved_vertices, r.max_displacement, 100.0 * r.max_displacement / diag, r.mean_displacement,
               r.faces_changed);
@@ -198,7 +197,6 @@ void add_deintersect(CLI::App& app, int& exit_code) {
       r.hammers += again.report.hammers;
       r.lifts += again.report.lifts;
       r.rounds += again.report.rounds;
-      r.pair_rounds += again.report.pair_rounds;
       r.max_displacement += again.report.max_displacement;  // an upper bound
       r.intersecting_faces_exact = again.report.intersecting_faces_exact;
       result.soup = std::move(again.soup);

@@ -95,7 +95,12 @@ deg_rows=""
 if want degenerate; then
   deg_inputs=("$root/fixtures/cad_cylinder.off" "$root/fixtures/tube_edge2.42.off" "$root/fixtures/anchor.off"
               "$root/fixtures/thingi10k_65004.stl")
-  for f in cgal__joint.off trimesh__round.stl cgal__pinion.off cgal__handle.off; do
+  # The corpus CAD tessellations: clean ones, and raw CAD STL exports that
+  # also self-intersect (where nothing may be cut: "pairs" shows none added).
+  for f in cgal__joint.off trimesh__round.stl cgal__pinion.off cgal__handle.off cgal__couplingdown.off \
+           cgal__blade.off cgal__turbine.off cgal__b9_mesh.off trimesh__fixed_top.ply trimesh__ADIS16480.STL \
+           cgal__ALSTOM_TEST4.off trimesh__angle_block.STL trimesh__idler_riser.STL \
+           trimesh__octagonal_pocket.stl trimesh__featuretype.STL; do
     [ -f "$corpus/$f" ] && deg_inputs+=("$corpus/$f")
   done
   for f in "${deg_inputs[@]}"; do
@@ -104,7 +109,7 @@ if want degenerate; then
     /usr/bin/time -f "%e %M" -o "$work/time.txt" "$b/polyheal" degenerate --json --overwrite "$f" -o "$work/deg_ours.off" \
       > "$work/deg.json" 2>/dev/null || code=$?
     read -r ours_s ours_kb < <(tail -n 1 "$work/time.txt")
-    if [ "$code" -ge 2 ]; then deg_rows+="| $name | — | — | error | | | | | | |"$'\n'; continue; fi
+    if [ "$code" -ge 2 ]; then deg_rows+="| $name | — | — | error | | | | | | | |"$'\n'; continue; fi
     faces_in=$(sed -n '/"faces"/,/}/p' "$work/deg.json" | json_num input /dev/stdin)
     caps_in=$(sed -n '/"before"/,/}/p' "$work/deg.json" | json_num caps /dev/stdin)
     needles_in=$(sed -n '/"before"/,/}/p' "$work/deg.json" | json_num needles /dev/stdin)
@@ -112,6 +117,7 @@ if want degenerate; then
     faces_out=$(sed -n '/"faces"/,/}/p' "$work/deg.json" | json_num output /dev/stdin)
     h_rel=$(json_num hausdorff_relative "$work/deg.json")
     certified=$(sed -n 's/.*"certified": \(true\|false\).*/\1/p' "$work/deg.json" | head -1)
+    pairs=$(sed -n '/"self_intersecting_pairs"/,/}/p' "$work/deg.json" | tr -d '\n ' | sed -n 's/.*"input":\([0-9]*\),"output":\([0-9]*\).*/\1 → \2/p')
     peer_row="cannot read it | | | "
     if timeout 1200 "$b/cgal_degenerate_peer" "$f" "$work/deg_cgal.off" > "$work/peer.txt" 2>/dev/null; then
       read -r cg_s cg_faces cg_h cg_diag < "$work/peer.txt"
@@ -120,7 +126,7 @@ if want degenerate; then
       cg_hrel=$(awk "BEGIN{printf \"%.2g\", $cg_h / $cg_diag}")
       peer_row="$cg_left | $cg_faces | $cg_hrel | $cg_s s"
     fi
-    deg_rows+="| $name | $faces_in | $caps_in / $needles_in | $left | $faces_out | $(awk "BEGIN{printf \"%.2g\", $h_rel}") | $ours_s s, $((ours_kb / 1024)) MB | $certified | $peer_row |"$'\n'
+    deg_rows+="| $name | $faces_in | $caps_in / $needles_in | $left | $faces_out | $(awk "BEGIN{printf \"%.2g\", $h_rel}") | $ours_s s, $((ours_kb / 1024)) MB | $certified | ${pairs:-?} | $peer_row |"$'\n'
     echo "$name: polyheal degenerate $ours_s s, $left left; CGAL ${cg_s:-?} s" >&2
   done
 fi
@@ -419,12 +425,14 @@ TAIL
 Same thresholds: caps above 175 deg, needles below 5 deg (for CGAL: longest/shortest
 edge above 1/sin 5 deg, its needle measure), tolerance 1 per mille of the bbox diagonal
 (for CGAL: the longest edge it may collapse and the highest cap it may flip). "left" = zero-area faces + caps + needles in the output, decided by
-`polyheal check` on the written file. Hausdorff is relative to the bbox diagonal
+`polyheal check` on the written file; "pairs": intersecting face pairs in the input and in
+polyheal's output (no slice cuts a face that intersects, so none are added; the
+bad faces there are left and listed). Hausdorff is relative to the bbox diagonal
 (polyheal: its bounded-error report; CGAL: `bounded_error_symmetric_Hausdorff_distance`).
 One run each, whole process (polyheal: read, repair, write, read back, certify).
 
-| input | faces | caps / needles in | polyheal left | polyheal faces out | polyheal Hausdorff | polyheal time | certified | CGAL left | CGAL faces out | CGAL Hausdorff | CGAL time |
-| --- | ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: |
+| input | faces | caps / needles in | polyheal left | polyheal faces out | polyheal Hausdorff | polyheal time | certified | polyheal pairs in → out | CGAL left | CGAL faces out | CGAL Hausdorff | CGAL time |
+| --- | ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: |
 TAIL
   printf "%s" "$deg_rows"
   cat <<'TAIL'

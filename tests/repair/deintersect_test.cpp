@@ -334,43 +334,12 @@ TEST_CASE("deintersect: operations tried and retracted leave no trace", "[repair
   o.max_displacement = -1;  // the default limit
   o.clearance_mode = ClearanceMode::tet_aspect;
   o.clearance = 5;
-  o.pair_rounds = false;  // they find swaps that lower the pair count
   const DeintersectResult result = remove_self_intersections(in, o);
   REQUIRE(result.report.trials > 0);
   REQUIRE(result.report.swaps + result.report.lifts == 0);
   CHECK(result.soup.points == in.points);
   CHECK(result.soup.indices == in.indices);
   CHECK(result.report.faces_changed == 0);
-}
-
-TEST_CASE("deintersect: rounds by pairs only ever lower (faces, pairs), and end", "[repair][deintersect]") {
-  // The tube at edge 4.0 with a clearance of a fifth of the edge: no swap or
-  // lift frees a face (§4.1), but swaps lower the pair count. With the pair
-  // rounds on, operations are kept, the faces left are no more than
-  // without them, and the pairs fewer.
-  const Soup in = read_soup(test::fixture("tube_edge4.0.off"));
-  DeintersectOptions o = only(&DeintersectOptions::swap);
-  o.lift = true;
-  o.max_displacement = -1;
-  o.clearance_mode = ClearanceMode::tet_aspect;
-  o.clearance = 5;
-  o.pair_rounds = false;
-  const DeintersectResult paper = remove_self_intersections(in, o);
-  o.pair_rounds = true;
-  const DeintersectResult ours = remove_self_intersections(in, o);
-  REQUIRE(paper.report.swaps + paper.report.lifts == 0);
-  CHECK(ours.report.pair_rounds > 0);
-  CHECK(ours.report.swaps + ours.report.lifts > 0);
-  CHECK(ours.report.rounds < o.max_rounds);  // ended because nothing applied
-  const Report before = inspect(in), after = inspect(written(ours, "deintersect_pair_rounds.off"));
-  const auto faces_of = [](const Report& r) {
-    std::set<std::size_t> f;
-    for (const FacePair& p : r.self_intersections) f.insert({p.first, p.second});
-    return f.size();
-  };
-  CHECK(faces_of(after) <= faces_of(before));
-  CHECK(after.self_intersections.size() < before.self_intersections.size());
-  CHECK(topology_of(after) == topology_of(before));
 }
 
 TEST_CASE("deintersect: a non-manifold soup is refused", "[repair][deintersect]") {

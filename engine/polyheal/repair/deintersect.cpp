@@ -92,18 +92,12 @@ class Deintersector {
   }
 
   /// Rounds of cost phase + implementation phase (§4.5) until nothing applies.
-  /// When a round under §4.1 applies nothing, one round runs under a weaker
-  /// criterion (ours, not the paper's): no more faces intersect, no free face
-  /// starts to, and fewer *pairs* intersect — two walls crossing along a
-  /// curve often come apart one pair at a time, each step freeing no face
-  /// yet. Then §4.1 again. Each kept operation lowers (faces, pairs)
-  /// lexicographically, so the rounds end; and the weaker rounds start only
-  /// where §4.1 has stopped, so they never undo what it would have done.
   void run() {
     while (intersecting_ > 0 && r_.rounds < o_.max_rounds) {
       ++r_.rounds;
       if (o_.observer) o_.observer->progress(1.0 - double(intersecting_) / double(std::max<std::size_t>(1, start_)));
       std::vector<Op> ops = cost_phase();
+      if (ops.empty()) break;
       std::stable_sort(ops.begin(), ops.end(), [](const Op& x, const Op& y) { return x.cost < y.cost; });
       std::size_t applied = 0;
       for (const Op& op : ops) {
@@ -115,10 +109,7 @@ class Deintersector {
           ++r_.stale;
         }
       }
-      if (by_pairs_) ++r_.pair_rounds;
-      if (applied == 0 && by_pairs_) break;
-      if (applied == 0 && !o_.pair_rounds) break;
-      by_pairs_ = applied == 0;
+      if (applied == 0) break;
     }
   }
 
@@ -134,7 +125,6 @@ class Deintersector {
   std::vector<std::vector<face_descriptor>> partners_;  // by face index: the faces it intersects
   std::size_t intersecting_ = 0;                        // faces with a partner
   std::size_t start_ = 0;
-  bool by_pairs_ = false;  // this round decides by intersecting pairs (run())
   std::unique_ptr<detail::SurfaceDistance> rays_;       // local-thickness mode: this round's surface
 
   static std::size_t id(face_descriptor f) { return static_cast<std::size_t>(f); }
@@ -258,8 +248,7 @@ class Deintersector {
   /// no intersection-free face becomes intersecting? For a swap the two
   /// faces are new triangles, so only their number is compared: no more of
   /// them intersect than of the two they replace. Returns how many fewer
-  /// faces intersect; 0 when refused. In a round by pairs (run()), returns 1
-  /// when no more faces intersect and fewer pairs do.
+  /// faces intersect; 0 when refused.
   long gain(const std::vector<face_descriptor>& changed,
                 const std::vector<std::pair<face_descriptor, face_descriptor>>& now, bool swap) const {
     auto in_changed = [&](face_descriptor f) { return std::find(changed.begin(), changed.end(), f) != changed.end(); };
@@ -296,12 +285,6 @@ class Deintersector {
       }
     }
     if (swap && after_changed > before_changed) return 0;
-    if (by_pairs_) {
-      std::size_t pairs_before = 0;  // each pair with a changed face, once
-      for (face_descriptor f : changed)
-        for (face_descriptor g : partners_[id(f)]) pairs_before += !in_changed(g) || id(f) < id(g);
-      return after_count <= before_count && now.size() < pairs_before ? 1 : 0;
-    }
     return std::max(0L, before_count - after_count);
   }
 

@@ -68,9 +68,6 @@ struct DeintersectOptions {
   double max_displacement = -1.0;
   double max_displacement_ratio = 0.02;
   bool swap = true, hammer = true, lift = true;  // which operations to use
-  /// When §4.1 applies nothing, a round that keeps operations lowering the
-  /// number of intersecting pairs without freeing a face (ours; see run()).
-  bool pair_rounds = true;
   bool certify = true;      // certify the rounded result (callers that certify the written file say false)
   Observer* observer = nullptr;
 };
@@ -91,7 +88,6 @@ struct DeintersectReport {
   std::size_t trials = 0;            // operations tried (cost phases and re-validations)
   std::size_t stale = 0;             // cost-phase operations no longer valid when their turn came
   int rounds = 0;
-  int pair_rounds = 0;               // of which decided by intersecting pairs (none freed a face)
   std::size_t intersecting_faces_exact = 0;  // left in the working mesh, before writing
   std::size_t moved_vertices = 0;
   double max_displacement = 0, mean_displacement = 0;  // over the moved vertices, model units
