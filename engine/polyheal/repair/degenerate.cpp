@@ -124,6 +124,7 @@ class Pipeline {
   /// §3-4: one slice per cap, until every cap is gone or refused.
   /// Returns the number of caps removed.
   std::size_t slice_caps() {
+    refresh_frozen();
     std::size_t removed = 0;
     std::vector<face_descriptor> queue = faces_of(Shape::cap);
     std::vector<char> refused(mesh_.number_of_faces() + 1, 0);
@@ -174,6 +175,7 @@ class Pipeline {
   /// where they are not needed. At most `budget` slices. Returns the number
   /// of slices made.
   std::size_t slice_needles(std::size_t budget, bool short_cuts, bool second_longest) {
+    refresh_frozen();
     std::size_t made = 0;
     for (face_descriptor needle : faces_of(Shape::needle)) {
       // Supersampling that keeps failing only grows the mesh (typically
@@ -235,10 +237,28 @@ class Pipeline {
   }
 
   /// Input faces (by id) that intersect another: slices leave them whole
-  /// (SliceOptions::frozen).
+  /// (SliceOptions::frozen) while they still do (refresh_frozen()).
   void freeze(const std::vector<FacePair>& intersecting, std::size_t faces) {
-    frozen_.assign(faces, 0);
-    for (const FacePair& p : intersecting) frozen_[p.first] = frozen_[p.second] = 1;
+    intersected_.assign(faces, 0);
+    for (const FacePair& p : intersecting) intersected_[p.first] = intersected_[p.second] = 1;
+    frozen_ = intersected_;
+  }
+
+  /// A collapse may reshape a face that intersected, or remove its partner;
+  /// once it intersects nothing, slices may cut it again (found on b9_mesh:
+  /// its one intersecting pair goes in decimation, and the needles beside
+  /// it then need a slice).
+  void refresh_frozen() {
+    if (std::find(frozen_.begin(), frozen_.end(), 1) == frozen_.end()) return;
+    const auto origin = face_origin_map(mesh_);
+    if (!origin) return;
+    std::fill(frozen_.begin(), frozen_.end(), 0);
+    for (face_descriptor f : mesh_.faces()) {
+      const std::int64_t i = (*origin)[f];
+      if (i >= 0 && static_cast<std::size_t>(i) < intersected_.size() && intersected_[static_cast<std::size_t>(i)] &&
+          index_.intersects({f}))
+        frozen_[static_cast<std::size_t>(i)] = 1;
+    }
   }
 
   void note_size() { r_.peak_faces = std::max<std::size_t>(r_.peak_faces, mesh_.number_of_faces()); }
@@ -286,7 +306,8 @@ class Pipeline {
   detail::ShapeDecimator decimator_;
   double cos_cap_ = 0, cos_needle_ = 0, snap_ = 0;
   std::size_t face_limit_ = 0;  // needle supersampling stops beyond it
-  std::vector<char> frozen_;    // by input face id: intersects another face
+  std::vector<char> intersected_;  // by input face id: intersected another face in the input
+  std::vector<char> frozen_;       // ... and still does (refresh_frozen())
 };
 
 }  // namespace
