@@ -103,6 +103,15 @@ if want degenerate; then
            trimesh__octagonal_pocket.stl trimesh__featuretype.STL; do
     [ -f "$corpus/$f" ] && deg_inputs+=("$corpus/$f")
   done
+  # The 500k-face target: a generated torus knot (500k faces) with slivers on
+  # 1% of its faces (two needles each) and near-collinear splits on 0.5% (a
+  # cap each), both 1e-3 of the local edge length.
+  "$b/polyheal_gen" torus-knot --faces 500000 "$work/knot500k.off" >/dev/null
+  "$b/polyheal" perturb --kind slivers --fraction 0.01 --epsilon 1e-3 --overwrite "$work/knot500k.off" \
+    -o "$work/knot500k_slivers.off" >/dev/null
+  "$b/polyheal" perturb --kind near-collinear --fraction 0.005 --epsilon 1e-3 --overwrite "$work/knot500k_slivers.off" \
+    -o "$work/knot500k_perturbed.off" >/dev/null
+  deg_inputs+=("$work/knot500k_perturbed.off")
   for f in "${deg_inputs[@]}"; do
     name=$(basename "$f")
     code=0
