@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <deque>
+#include <unordered_set>
 
 #include "polyheal/inspect/exact_predicates.h"
 
@@ -85,6 +86,15 @@ class Slicer {
     for (auto e : mesh_.edges()) guard(mesh_.halfedge(e));
   }
 
+  /// The safeguard on every edge at f's corners, once per corner: what the
+  /// global pass would decide there (a corner's classification depends on
+  /// all its edges, not only f's).
+  void guard_corners(face_descriptor f) {
+    for (vertex_descriptor v : CGAL::vertices_around_face(mesh_.halfedge(f), mesh_))
+      if (guarded_.insert(v).second)
+        for (halfedge_descriptor h : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) guard(h);
+  }
+
   void guard(halfedge_descriptor h) {
     if (!crossing(h)) return;
     const vertex_descriptor u = mesh_.source(h), v = mesh_.target(h);
@@ -114,7 +124,7 @@ class Slicer {
         if (is_cut(f)) out.push_back(f);
       return out;
     }
-    for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(o_.seed), mesh_)) guard(h);
+    guard_corners(o_.seed);
     if (!is_cut(o_.seed)) return out;
     std::vector<char> seen(mesh_.num_faces(), 0);
     std::deque<face_descriptor> queue{o_.seed};
@@ -144,8 +154,8 @@ class Slicer {
       const face_descriptor f = queue.front();
       queue.pop_front();
       out.push_back(f);
+      guard_corners(f);
       for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_)) {
-        guard(h);
         if (crossing(h) && far(mesh_.source(h)) && far(mesh_.target(h))) snap_one_end(mesh_.source(h), mesh_.target(h));
         if (crossing(h)) visit(mesh_.face(mesh_.opposite(h)));
         if (side(mesh_.target(h)) == 0 && !far(mesh_.target(h)))
@@ -297,6 +307,7 @@ class Slicer {
   Kernel::FT eps2_;        // snap distance, squared
   double sin_bound_ = 0;  // the safeguard's angle bound
   mutable SliceResult result_;  // classify() counts the vertices it snaps
+  std::unordered_set<vertex_descriptor> guarded_;  // local slices: corners whose edges are guarded
 };
 
 }  // namespace
