@@ -127,6 +127,8 @@ void add_degenerate(CLI::App& app, int& exit_code) {
       "slicing leaves are removed by edge collapses and flips that keep every vertex\n"
       "at its input position, change no topology, create no cap or self-intersection,\n"
       "and stay within --tolerance of the input surface.\n"
+      "A face that intersects another is never cut: bad faces in and beside the\n"
+      "input's intersections are listed (run deintersect or repair first).\n"
       "The written file is read back and checked exactly.\n\n"
       "Exit 0 when the written file has no zero-area face, cap or needle, the same\n"
       "topology as the input, no new self-intersection and a Hausdorff distance\n"
