@@ -17,7 +17,6 @@ nlohmann::json regions_json(const std::vector<Region>& regions) {
   return a;
 }
 
-
 struct RebuildArgs : RepairFiles {
   std::string cell;  // "0.5" (model units) or "1%" (of the bbox diagonal)
   std::string sheets = "shell";

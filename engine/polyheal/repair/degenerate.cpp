@@ -416,14 +416,17 @@ void certify(const Soup& input, const Soup& written, DegenerateReport& r) {
   r.self_intersections_out = out.self_intersections.size();
   r.topology_out = topology_of(out);
   r.leftovers.clear();
+  // Corners by welded point: pinch copies are written as separate points.
+  const Weld weld = weld_identical_points(written.points);
   std::vector<char> intersecting(out.faces, 0), beside(written.points.size(), 0);
   for (const FacePair& p : out.self_intersections)
     for (std::size_t f : {p.first, p.second}) {
       intersecting[f] = 1;
-      for (Index v : written.face(f)) beside[v] = 1;
+      for (Index v : written.face(f)) beside[weld.representative[v]] = 1;
     }
   auto is_beside = [&](std::size_t f) {
-    return std::any_of(written.face(f).begin(), written.face(f).end(), [&](Index v) { return beside[v] != 0; });
+    return std::any_of(written.face(f).begin(), written.face(f).end(),
+                       [&](Index v) { return beside[weld.representative[v]] != 0; });
   };
   auto why = [&](std::size_t f, const char* unfixable) {
     const bool rounding = f < r.exact_bad.size() && !r.exact_bad[f];

@@ -792,21 +792,17 @@ class PlanarCoarsening {
 // take the cheapest collapses first.
 
 /// The extracted surface for "is x within r of it?" (r about the cell the
-/// grid was built with, or less): its triangles hashed into a uniform grid, the few
-/// near x tested in doubles, stopping at the first. The grid's triangles are
+/// grid was built with, or less): its triangles hashed into a uniform grid,
+/// the few near x tested in doubles, stopping at the first. The grid's triangles are
 /// about a cell in size, so a cell holds a handful; an AABB tree's nearest
 /// point query took 42% of the decimation's time on small inputs.
 class TriangleGrid {
  public:
   TriangleGrid(const Soup& surface, double cell) : surface_(surface), cell_(cell) {
     for (std::size_t t = 0; t < surface.face_count(); ++t) {
-      Point3d lo = surface.points[surface.face(t)[0]], hi = lo;
-      for (Index v : surface.face(t))
-        for (int d = 0; d < 3; ++d) {
-          lo[d] = std::min(lo[d], surface.points[v][d]);
-          hi[d] = std::max(hi[d], surface.points[v][d]);
-        }
-      for_cells(lo, hi, [&](const Key& k) { cells_[k].push_back(t); return false; });
+      Region box;
+      for (Index v : surface.face(t)) grow(box, surface.points[v], box.count++ == 0);
+      for_cells(box.lo, box.hi, [&](const Key& k) { cells_[k].push_back(t); return false; });
     }
   }
 

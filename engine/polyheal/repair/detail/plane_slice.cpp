@@ -82,6 +82,7 @@ class Slicer {
   // meets for a local one, as it meets it (guard()).
   void apply_safeguard() {
     sin_bound_ = sin_degrees(180.0 - o_.cap_angle);
+    normal_ = plane_.orthogonal_vector();
     if (o_.seed != Mesh::null_face()) return;
     for (auto e : mesh_.edges()) guard(mesh_.halfedge(e));
   }
@@ -98,7 +99,7 @@ class Slicer {
   void guard(halfedge_descriptor h) {
     if (!crossing(h)) return;
     const vertex_descriptor u = mesh_.source(h), v = mesh_.target(h);
-    if (angle_to_plane_less(mesh_.point(v) - mesh_.point(u), plane_.orthogonal_vector(), sin_bound_)) snap_one_end(u, v);
+    if (angle_to_plane_less(mesh_.point(v) - mesh_.point(u), normal_, sin_bound_)) snap_one_end(u, v);
   }
 
   /// Classifies one endpoint of edge uv as on the plane: the nearer one,
@@ -305,7 +306,8 @@ class Slicer {
   mutable std::vector<signed char> side_;
   std::vector<char> protected_;
   Kernel::FT eps2_;        // snap distance, squared
-  double sin_bound_ = 0;  // the safeguard's angle bound
+  double sin_bound_ = 0;    // the safeguard's angle bound
+  Kernel::Vector_3 normal_;  // the plane's normal
   mutable SliceResult result_;  // classify() counts the vertices it snaps
   std::unordered_set<vertex_descriptor> guarded_;  // local slices: corners whose edges are guarded
 };
