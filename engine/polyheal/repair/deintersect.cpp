@@ -7,6 +7,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <unordered_map>
 #include <unordered_set>
@@ -47,7 +48,7 @@ double tet_volume(const Point3d& a, const Point3d& b, const Point3d& c, const Po
   return std::abs(dot(sub(b, a), cross(sub(c, a), sub(d, a)))) / 6.0;
 }
 
-enum class OpKind { swap, hammer, lift };
+enum class OpKind { swap, hammer, lift, group };
 
 /// One operation, in terms that survive other operations: a swap names its
 /// edge by its end vertices, a move names vertices and their new positions.
@@ -104,7 +105,10 @@ class Deintersector {
         if (intersecting_ == 0) break;
         if (try_op(op, /*keep=*/true)) {
           ++applied;
-          ++(op.kind == OpKind::swap ? r_.swaps : op.kind == OpKind::hammer ? r_.hammers : r_.lifts);
+          ++(op.kind == OpKind::swap     ? r_.swaps
+             : op.kind == OpKind::hammer ? r_.hammers
+             : op.kind == OpKind::lift   ? r_.lifts
+                                         : r_.group_moves);
         } else {
           ++r_.stale;
         }
@@ -424,11 +428,15 @@ class Deintersector {
   /// the paper's candidates (the paper's move), to the average of the near
   /// ones, and to each candidate alone (an average can mix directions that
   /// cancel out). cheapest_valid keeps the best valid one.
-  std::vector<Op> hammer_ops(vertex_descriptor a) const {
+  struct HammerCandidates {
+    std::vector<Point> paper, near, through, group;
+  };
+  HammerCandidates hammer_candidates(vertex_descriptor a) const {
+    HammerCandidates out;
+    auto& [paper, near, through, group] = out;
     const std::vector<face_descriptor> around = star({a});
     const std::vector<face_descriptor> others = partners_around(around);
     const Point& pa = mesh_.point(a);
-    std::vector<Point> paper, near;
     std::vector<face_descriptor> crossed;  // the faces a's edges cross
     for (halfedge_descriptor h : CGAL::halfedges_around_target(mesh_.halfedge(a), mesh_)) {
       const vertex_descriptor b = mesh_.source(h);
@@ -454,22 +462,34 @@ class Deintersector {
       }
     }
     // Through each crossed face g: a moved along g's normal to ε past g's
-    // plane — face lifting (§4.4) with the roles of node and face swapped.
-    // Hammering slides a along its edges; where those run almost parallel
-    // to g (a ring vertex poking through a wall) that is a long way round.
-    std::vector<Point> through;
+    // plane — face lifting (§4.4) with the roles of node and face swapped,
+    // so with the lifting clearance of g. Hammering slides a along its
+    // edges; where those run almost parallel to g (a ring vertex poking
+    // through a wall) that is a long way round. `group` holds the same
+    // moves with the hammer's clearance at a's shortest edge, for group_ops.
+    double shortest = std::numeric_limits<double>::infinity();
+    for (vertex_descriptor b : CGAL::vertices_around_target(mesh_.halfedge(a), mesh_))
+      shortest = std::min(shortest, length(sub(p3(b), p3(a))));
     for (face_descriptor g : crossed) {
       Point3d n = approx_point3d(CGAL::ORIGIN + normal(g));
       const double len = length(n);
       if (!(len > 0)) continue;
       for (double& x : n) x /= len;
-      const double eps = clearance(g, n);
-      if (eps < 0) continue;
       const Point3d p = p3(a);
       const double h = dot(sub(p, p3(corners(g)[0])), n);
-      const double step = h + (h >= 0 ? eps : -eps);
-      through.push_back(Point(p[0] - step * n[0], p[1] - step * n[1], p[2] - step * n[2]));
+      auto past = [&](double eps) {
+        const double step = h + (h >= 0 ? eps : -eps);
+        return Point(p[0] - step * n[0], p[1] - step * n[1], p[2] - step * n[2]);
+      };
+      if (const double eps = clearance(g, n); eps >= 0) through.push_back(past(eps));
+      group.push_back(past(edge_clearance(shortest)));
     }
+    return out;
+  }
+
+  /// The single-vertex hammer ops of `a` from its candidates `c`.
+  std::vector<Op> hammer_ops(vertex_descriptor a, const HammerCandidates& c) const {
+    const Point& pa = mesh_.point(a);
     std::vector<Op> ops;
     auto move_to = [&](const Point& p) {
       Op op;
@@ -482,7 +502,7 @@ class Deintersector {
       for (const Point& p : ps) sum = sum + (p - CGAL::ORIGIN);
       return CGAL::ORIGIN + sum / static_cast<int>(ps.size());
     };
-    for (const std::vector<Point>* set : {&paper, &near, &through}) {
+    for (const std::vector<Point>* set : {&c.paper, &c.near, &c.through}) {
       if (set->empty()) continue;
       move_to(average(*set));
       if (set->size() > 1)
@@ -623,7 +643,7 @@ class Deintersector {
       }
     std::vector<Op> ops;
     if (!o_.swap) edges.clear();
-    if (!o_.hammer) vertices.clear();
+    if (!o_.hammer && !o_.group) vertices.clear();
     if (!o_.lift) faces.clear();
     for (const auto& [a, b] : edges) {
       Op op;
@@ -637,9 +657,62 @@ class Deintersector {
                            p3(mesh_.target(mesh_.next(mesh_.opposite(h)))));
       ops.push_back(op);
     }
-    for (vertex_descriptor v : vertices) cheapest_valid(hammer_ops(v), ops);
+    std::unordered_map<std::size_t, Point> through;  // per vertex: its least through move within the limit
+    for (vertex_descriptor v : vertices) {
+      const HammerCandidates c = hammer_candidates(v);
+      if (o_.hammer) cheapest_valid(hammer_ops(v, c), ops);
+      if (const auto p = least_move(v, c.group)) through.emplace(std::size_t(v), *p);
+    }
+    if (o_.group) group_ops(vertices, through, ops);
     for (face_descriptor f : faces) cheapest_valid(lift_ops(f), ops);
     return ops;
+  }
+
+  /// Of the positions `to` for v (exact constructions), the rounded one
+  /// nearest v within the displacement limit; none for a pinned vertex.
+  std::optional<Point> least_move(vertex_descriptor v, const std::vector<Point>& to) const {
+    if (pinned_ && (*pinned_)[v]) return std::nullopt;
+    std::optional<Point> best;
+    double best_shift = 0;
+    for (const Point& p : to) {
+      const Point q = rounded(p);
+      const double shift = length(sub(approx_point3d(q), p3(v)));
+      if (length(sub(approx_point3d(q), original_[v])) > r_.max_displacement_allowed || q == mesh_.point(v)) continue;
+      if (!best || shift < best_shift) best = q, best_shift = shift;
+    }
+    return best;
+  }
+
+  /// Group moves (ours; the paper moves one node or one face at a time).
+  /// Where a whole sheet pokes through another — the inner ring of a tube
+  /// whose walls cross — every vertex must move back before any face is
+  /// freed: moving one leaves its faces crossing through its neighbours, so
+  /// no single move meets §4.1 and the sheet stays. Each connected set (by
+  /// mesh edges) of vertices that have a through move within the limit
+  /// (`through`, see hammer_candidates) is moved at once, each vertex to its
+  /// own through position (`HammerCandidates::group`), as one operation
+  /// under the same criteria.
+  void group_ops(const std::vector<vertex_descriptor>& vertices,
+                 const std::unordered_map<std::size_t, Point>& through, std::vector<Op>& ops) {
+    std::unordered_set<std::size_t> done;
+    for (vertex_descriptor seed : vertices) {
+      if (!through.count(std::size_t(seed)) || !done.insert(std::size_t(seed)).second) continue;
+      Op op;
+      op.kind = OpKind::group;
+      std::vector<vertex_descriptor> todo{seed};
+      while (!todo.empty()) {
+        const vertex_descriptor v = todo.back();
+        todo.pop_back();
+        const Point& to = through.at(std::size_t(v));
+        op.moves.push_back({v, to});
+        op.shift = std::max(op.shift, length(sub(approx_point3d(to), p3(v))));
+        for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_))
+          if (through.count(std::size_t(w)) && done.insert(std::size_t(w)).second) todo.push_back(w);
+      }
+      if (op.moves.size() < 2) continue;  // a single vertex: one of its hammer ops
+      op.cost = move_cost(op);
+      if (try_op(op, false) > 0) ops.push_back(op);
+    }
   }
 
   /// Among the valid candidates of one vertex or face, the one that moves

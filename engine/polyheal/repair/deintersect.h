@@ -11,9 +11,11 @@
 //                 phase tries every applicable operation on the faces that
 //                 intersect now — edge swap (§4.2) on their edges, edge
 //                 hammer (§4.3) on their vertices, face lift (§4.4) on the
-//                 faces themselves — measures the volume it sweeps and
-//                 retracts it; the implementation phase applies them in
-//                 ascending cost, each re-validated on the current mesh.
+//                 faces themselves, plus our group move (a connected set of
+//                 vertices poking through faces, moved back at once) —
+//                 measures the volume it sweeps and retracts it; the
+//                 implementation phase applies them in ascending cost,
+//                 each re-validated on the current mesh.
 //                 Rounds repeat until nothing applies.
 //   3. certify    the mesh as written (doubles) is checked exactly: the
 //                 intersecting faces left, degenerate faces, topology, the
@@ -67,7 +69,8 @@ struct DeintersectOptions {
   /// that would need more are left and reported.
   double max_displacement = -1.0;
   double max_displacement_ratio = 0.02;
-  bool swap = true, hammer = true, lift = true;  // which operations to use
+  bool swap = true, hammer = true, lift = true;  // which operations to use (the paper's) ...
+  bool group = true;                             // ... and group moves (ours, see deintersect.cpp)
   bool certify = true;      // certify the rounded result (callers that certify the written file say false)
   Observer* observer = nullptr;
 };
@@ -84,7 +87,7 @@ struct DeintersectReport {
   std::size_t intersecting_faces_in = 0, intersecting_pairs_in = 0, degenerate_faces_in = 0;
   SurfaceTopology topology_in;
   // repair
-  std::size_t swaps = 0, hammers = 0, lifts = 0;
+  std::size_t swaps = 0, hammers = 0, lifts = 0, group_moves = 0;
   std::size_t trials = 0;            // operations tried (cost phases and re-validations)
   std::size_t stale = 0;             // cost-phase operations no longer valid when their turn came
   int rounds = 0;

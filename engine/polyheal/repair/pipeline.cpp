@@ -312,10 +312,12 @@ class Pipeline {
                   {"swaps", double(r.swaps)},
                   {"hammers", double(r.hammers)},
                   {"lifts", double(r.lifts)},
+                  {"group_moves", double(r.group_moves)},
                   {"moved_vertices", double(r.moved_vertices)}};
       s.outcome = std::to_string(r.intersecting_faces_in) + " intersecting faces, " +
                   std::to_string(r.intersecting_faces_exact) + " left; " + std::to_string(r.swaps) + " swaps, " +
-                  std::to_string(r.hammers) + " hammers, " + std::to_string(r.lifts) + " lifts";
+                  std::to_string(r.hammers) + " hammers, " + std::to_string(r.lifts) + " lifts, " +
+                  std::to_string(r.group_moves) + " group moves";
       return std::move(res.soup);
     });
   }
