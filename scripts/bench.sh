@@ -466,8 +466,9 @@ TAIL
 
 Defaults on both sides (polyheal: clearance 2% of the lifted face's longest edge,
 no vertex moved further than 2% of the bbox diagonal — on the `tube_edge*` rows,
-0.4, the target; CGAL: local smoothing, then removal and hole filling). "left": polyheal's intersecting faces in its output;
-CGAL's intersecting *pairs* in its output — both decided by `polyheal check` on the
+0.4, the target; CGAL: local smoothing, then removal and hole filling).
+"left": polyheal's intersecting faces in its output; CGAL's intersecting *pairs*
+in its output — both decided by `polyheal check` on the
 written file (0 = intersection-free). "move": polyheal's largest vertex displacement
 (absolute, and % of the bbox diagonal); Hausdorff is % of the bbox diagonal
 (polyheal: its bounded-error report; CGAL: `bounded_error_symmetric_Hausdorff_distance`).
