@@ -19,14 +19,14 @@ namespace {
 
 struct DeintersectArgs : RepairFiles {
   std::string clearance;  // "0.01" (model units) or "local"
-  std::string ops = "swap,hammer,lift,group";
+  std::string ops = "swap,hammer,lift,group,pair";
   std::string max_displacement;  // "0.5" (model units) or "2%" (of the bbox diagonal)
   double tet_aspect = 0;
   DeintersectOptions options;
 };
 
 void parse_ops(const std::string& list, DeintersectOptions& o) {
-  o.swap = o.hammer = o.lift = o.group = false;
+  o.swap = o.hammer = o.lift = o.group = o.pair = false;
   std::size_t start = 0;
   while (start <= list.size()) {
     const std::size_t end = std::min(list.find(',', start), list.size());
@@ -35,7 +35,9 @@ void parse_ops(const std::string& list, DeintersectOptions& o) {
     else if (op == "hammer") o.hammer = true;
     else if (op == "lift") o.lift = true;
     else if (op == "group") o.group = true;
-    else throw CLI::ValidationError("--ops", "expected a comma-separated list of swap, hammer, lift, group: " + list);
+    else if (op == "pair") o.pair = true;
+    else
+      throw CLI::ValidationError("--ops", "expected a comma-separated list of swap, hammer, lift, group, pair: " + list);
     start = end + 1;
   }
 }
@@ -85,7 +87,8 @@ nlohmann::json to_json(const DeintersectArgs& a, const DeintersectReport& r, dou
       {"intersecting_pairs", {{"input", r.intersecting_pairs_in}, {"output", r.intersecting_pairs_out}}},
       {"degenerate_faces", {{"input", r.degenerate_faces_in}, {"output", r.degenerate_faces_out}}},
       {"operations", {{"swaps", r.swaps}, {"hammers", r.hammers}, {"lifts", r.lifts},
-                      {"group_moves", r.group_moves}, {"trials", r.trials},
+                      {"group_moves", r.group_moves},
+                      {"pair_moves", r.pair_moves}, {"trials", r.trials},
                       {"stale", r.stale}}},
       {"rounds", r.rounds},
       {"topology", {{"input", topology_json(r.topology_in)}, {"output", topology_json(r.topology_out)}}},
@@ -115,8 +118,9 @@ void print_text(const DeintersectArgs& a, const DeintersectReport& r) {
   else std::printf(" %g\n", r.clearance);
   std::printf("  intersecting faces: %zu -> %zu (pairs %zu -> %zu)\n", r.intersecting_faces_in, r.intersecting_faces_out,
               r.intersecting_pairs_in, r.intersecting_pairs_out);
-  std::printf("  operations: %zu swaps, %zu hammers, %zu lifts, %zu group moves in %d rounds (%zu trials, %zu stale)\n",
-              r.swaps, r.hammers, r.lifts, r.group_moves, r.rounds, r.trials, r.stale);
+  std::printf("  operations: %zu swaps, %zu hammers, %zu lifts, %zu group moves, %zu pair moves in %d rounds (%zu trials, "
+              "%zu stale)\n",
+              r.swaps, r.hammers, r.lifts, r.group_moves, r.pair_moves, r.rounds, r.trials, r.stale);
   std::printf("  moved %zu vertices: max %.6g (%.3g%% of the bbox diagonal), mean %.6g; %zu faces changed\n",
               r.moved_vertices, r.max_displacement, 100.0 * r.max_displacement / diag, r.mean_displacement,
               r.faces_changed);
@@ -131,7 +135,7 @@ void print_text(const DeintersectArgs& a, const DeintersectReport& r) {
     std::printf("  still intersecting (output face ids):");
     for (std::size_t k = 0; k < shown; ++k) std::printf(" %zu", r.unfreed_faces[k]);
     if (shown < r.unfreed_faces.size()) std::printf(" ... and %zu more (--list)", r.unfreed_faces.size() - shown);
-    std::printf("\n    (no swap, hammer, lift or group move reduces them without making another face intersect)\n");
+    std::printf("\n    (no operation reduces them without making another face intersect)\n");
   }
   std::printf("  time: detect %.3f s, repair %.3f s, certify %.3f s\n", r.seconds_detect, r.seconds_repair,
               r.seconds_certify);
@@ -154,8 +158,10 @@ void add_deintersect(CLI::App& app, int& exit_code) {
       "and applied cheapest first, in rounds. A group move (ours, not the paper's)\n"
       "moves a connected set of vertices that poke through a face back past it at\n"
       "once, for a sheet no single move can free (a tube's inner wall through its\n"
-      "outer one). Faces away from the intersections keep\n"
-      "their exact input coordinates; every face is kept (swaps re-connect, moves move).\n"
+      "outer one). When nothing else applies, a pair move smooths a corner of\n"
+      "each of two crossing faces at once (two bumps on nearly coincident sheets).\n"
+      "Faces away from the intersections keep their exact input coordinates; every\n"
+      "face is kept (swaps re-connect, moves move).\n"
       "Clearance (how far a lifted face clears the nodes it was crossing): by default\n"
       "2% of the lifted face's longest edge; --clearance D in model units;\n"
       "--clearance local from the local thickness (rays along the face normal);\n"
@@ -176,7 +182,7 @@ void add_deintersect(CLI::App& app, int& exit_code) {
   cmd->add_option("--max-displacement", args->max_displacement,
                   "no vertex moves further than this from its input position: model units, or a percentage "
                   "of the bbox diagonal (default 2%); faces that would need more are left and reported");
-  cmd->add_option("--ops", args->ops, "operations to use, comma-separated (default swap,hammer,lift,group)");
+  cmd->add_option("--ops", args->ops, "operations to use, comma-separated (default swap,hammer,lift,group,pair)");
   cmd->callback([args, &exit_code] {
     parse_clearance(*args, args->options);
     parse_ops(args->ops, args->options);
@@ -202,6 +208,7 @@ void add_deintersect(CLI::App& app, int& exit_code) {
       r.hammers += again.report.hammers;
       r.lifts += again.report.lifts;
       r.group_moves += again.report.group_moves;
+      r.pair_moves += again.report.pair_moves;
       r.rounds += again.report.rounds;
       r.max_displacement += again.report.max_displacement;  // an upper bound
       r.intersecting_faces_exact = again.report.intersecting_faces_exact;

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <set>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -48,7 +49,7 @@ double tet_volume(const Point3d& a, const Point3d& b, const Point3d& c, const Po
   return std::abs(dot(sub(b, a), cross(sub(c, a), sub(d, a)))) / 6.0;
 }
 
-enum class OpKind { swap, hammer, lift, group };
+enum class OpKind { swap, hammer, lift, group, pair };
 
 /// One operation, in terms that survive other operations: a swap names its
 /// edge by its end vertices, a move names vertices and their new positions.
@@ -108,7 +109,8 @@ class Deintersector {
           ++(op.kind == OpKind::swap     ? r_.swaps
              : op.kind == OpKind::hammer ? r_.hammers
              : op.kind == OpKind::lift   ? r_.lifts
-                                         : r_.group_moves);
+             : op.kind == OpKind::group  ? r_.group_moves
+                                         : r_.pair_moves);
         } else {
           ++r_.stale;
         }
@@ -644,6 +646,7 @@ class Deintersector {
     std::vector<Op> ops;
     if (!o_.swap) edges.clear();
     if (!o_.hammer && !o_.group) vertices.clear();
+    const std::vector<face_descriptor> intersecting = faces;
     if (!o_.lift) faces.clear();
     for (const auto& [a, b] : edges) {
       Op op;
@@ -665,6 +668,7 @@ class Deintersector {
     }
     if (o_.group) group_ops(vertices, through, ops);
     for (face_descriptor f : faces) cheapest_valid(lift_ops(f), ops);
+    if (ops.empty() && o_.pair) pair_ops(intersecting, ops);  // the last resort, see pair_ops
     return ops;
   }
 
@@ -713,6 +717,48 @@ class Deintersector {
       op.cost = move_cost(op);
       if (try_op(op, false) > 0) ops.push_back(op);
     }
+  }
+
+  /// The centroid of v's neighbours (one step of umbrella smoothing).
+  Point umbrella(vertex_descriptor v) const {
+    Vector sum = CGAL::NULL_VECTOR;
+    int k = 0;
+    for (vertex_descriptor b : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_)) {
+      sum = sum + (mesh_.point(b) - CGAL::ORIGIN);
+      ++k;
+    }
+    return CGAL::ORIGIN + sum / k;
+  }
+
+  /// Pair moves (ours; only when no other operation applies). Two crossing
+  /// faces f and g can each be a bump raised off a flat fan — a vertex
+  /// inside the triangle of its neighbours, lifted — on two nearly
+  /// coincident sheets (CAD and scan meshes with a thin fin): then
+  /// flattening either bump alone leaves the other crossing, and moving one
+  /// vertex gains nothing, but flattening both frees both. For each corner u
+  /// of f and w of g (not shared), u and w move together to the centroids
+  /// of their neighbours; among one pair's candidates the smallest valid
+  /// move is kept (cheapest_valid), under the same criteria as any move.
+  void pair_ops(const std::vector<face_descriptor>& faces, std::vector<Op>& ops) {
+    std::set<std::pair<std::size_t, std::size_t>> tried;
+    for (face_descriptor f : faces)
+      for (face_descriptor g : partners_[id(f)]) {
+        if (id(g) < id(f)) continue;  // each pair once
+        std::vector<Op> candidates;
+        for (vertex_descriptor u : corners(f))
+          for (vertex_descriptor w : corners(g)) {
+            if (has_vertex(g, u) || has_vertex(f, w)) continue;
+            const std::size_t a = std::size_t(u), b = std::size_t(w);
+            if (!tried.insert({std::min(a, b), std::max(a, b)}).second) continue;
+            const auto to_u = least_move(u, {umbrella(u)}), to_w = least_move(w, {umbrella(w)});
+            if (!to_u || !to_w) continue;
+            Op op;
+            op.kind = OpKind::pair;
+            op.moves = {{u, *to_u}, {w, *to_w}};
+            candidates.push_back(op);
+          }
+        cheapest_valid(std::move(candidates), ops);
+      }
   }
 
   /// Among the valid candidates of one vertex or face, the one that moves

@@ -12,7 +12,9 @@
 //                 intersect now — edge swap (§4.2) on their edges, edge
 //                 hammer (§4.3) on their vertices, face lift (§4.4) on the
 //                 faces themselves, plus our group move (a connected set of
-//                 vertices poking through faces, moved back at once) —
+//                 vertices poking through faces, moved back at once) and,
+//                 when nothing else applies, our pair move (a corner of
+//                 each of two crossing faces smoothed at once) —
 //                 measures the volume it sweeps and retracts it; the
 //                 implementation phase applies them in ascending cost,
 //                 each re-validated on the current mesh.
@@ -70,7 +72,7 @@ struct DeintersectOptions {
   double max_displacement = -1.0;
   double max_displacement_ratio = 0.02;
   bool swap = true, hammer = true, lift = true;  // which operations to use (the paper's) ...
-  bool group = true;                             // ... and group moves (ours, see deintersect.cpp)
+  bool group = true, pair = true;                // ... and ours: group and pair moves (deintersect.cpp)
   bool certify = true;      // certify the rounded result (callers that certify the written file say false)
   Observer* observer = nullptr;
 };
@@ -87,7 +89,7 @@ struct DeintersectReport {
   std::size_t intersecting_faces_in = 0, intersecting_pairs_in = 0, degenerate_faces_in = 0;
   SurfaceTopology topology_in;
   // repair
-  std::size_t swaps = 0, hammers = 0, lifts = 0, group_moves = 0;
+  std::size_t swaps = 0, hammers = 0, lifts = 0, group_moves = 0, pair_moves = 0;
   std::size_t trials = 0;            // operations tried (cost phases and re-validations)
   std::size_t stale = 0;             // cost-phase operations no longer valid when their turn came
   int rounds = 0;

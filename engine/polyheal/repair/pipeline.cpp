@@ -313,11 +313,13 @@ class Pipeline {
                   {"hammers", double(r.hammers)},
                   {"lifts", double(r.lifts)},
                   {"group_moves", double(r.group_moves)},
+                  {"pair_moves", double(r.pair_moves)},
                   {"moved_vertices", double(r.moved_vertices)}};
       s.outcome = std::to_string(r.intersecting_faces_in) + " intersecting faces, " +
                   std::to_string(r.intersecting_faces_exact) + " left; " + std::to_string(r.swaps) + " swaps, " +
                   std::to_string(r.hammers) + " hammers, " + std::to_string(r.lifts) + " lifts, " +
-                  std::to_string(r.group_moves) + " group moves";
+                  std::to_string(r.group_moves) + " group moves, " +
+                  std::to_string(r.pair_moves) + " pair moves";
       return std::move(res.soup);
     });
   }
