@@ -469,14 +469,10 @@ class Deintersector {
     // edges; where those run almost parallel to g (a ring vertex poking
     // through a wall) that is a long way round. `group` holds the same
     // moves with the hammer's clearance at a's shortest edge, for group_ops.
-    double shortest = std::numeric_limits<double>::infinity();
-    for (vertex_descriptor b : CGAL::vertices_around_target(mesh_.halfedge(a), mesh_))
-      shortest = std::min(shortest, length(sub(p3(b), p3(a))));
+    const double shortest = shortest_edge(a);
     for (face_descriptor g : crossed) {
-      Point3d n = approx_point3d(CGAL::ORIGIN + normal(g));
-      const double len = length(n);
-      if (!(len > 0)) continue;
-      for (double& x : n) x /= len;
+      Point3d n;
+      if (!unit_normal(g, n)) continue;
       const Point3d p = p3(a);
       const double h = dot(sub(p, p3(corners(g)[0])), n);
       auto past = [&](double eps) {
@@ -551,13 +547,17 @@ class Deintersector {
     return t.size() == 3 ? t[1] : t.size() == 2 ? 0.5 * (t[0] + t[1]) : t[0];
   }
 
-  /// Face lifting (§4.4, Fig. 8): the nodes p_i of the edges crossing f give
-  /// signed heights d_i = (p_i - t_1).n; f moves by n(d_max + ε) or by
-  /// n(d_min - ε). Both are returned; the cost phase keeps the valid one,
-  /// the smaller when both are.
-  std::vector<Op> lift_ops(face_descriptor f) const {
-    std::vector<Op> ops;
-    const auto c = corners(f);
+  /// The length of v's shortest edge.
+  double shortest_edge(vertex_descriptor v) const {
+    double shortest = std::numeric_limits<double>::infinity();
+    for (vertex_descriptor b : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_))
+      shortest = std::min(shortest, length(sub(p3(b), p3(v))));
+    return shortest;
+  }
+
+  /// The nodes p_i of §4.4: the ends of the edges that cross f (edges of
+  /// the faces f intersects, sharing no vertex with f).
+  std::vector<vertex_descriptor> nodes_crossing(face_descriptor f) const {
     const Triangle t = triangle(f);
     std::vector<vertex_descriptor> nodes;
     for (face_descriptor g : partners_[id(f)])
@@ -568,11 +568,30 @@ class Deintersector {
         for (vertex_descriptor x : {p, q})
           if (std::find(nodes.begin(), nodes.end(), x) == nodes.end()) nodes.push_back(x);
       }
-    if (nodes.empty()) return ops;
-    Point3d n = approx_point3d(CGAL::ORIGIN + normal(f));
+    return nodes;
+  }
+
+  /// f's unit normal in doubles (a direction to move along, not a
+  /// predicate); false for a face too small to have one.
+  bool unit_normal(face_descriptor f, Point3d& n) const {
+    n = approx_point3d(CGAL::ORIGIN + normal(f));
     const double len = length(n);
-    if (!(len > 0)) return ops;
+    if (!(len > 0)) return false;
     for (double& x : n) x /= len;
+    return true;
+  }
+
+  /// Face lifting (§4.4, Fig. 8): the nodes p_i of the edges crossing f give
+  /// signed heights d_i = (p_i - t_1).n; f moves by n(d_max + ε) or by
+  /// n(d_min - ε). Both are returned; the cost phase keeps the valid one,
+  /// the smaller when both are.
+  std::vector<Op> lift_ops(face_descriptor f) const {
+    std::vector<Op> ops;
+    const auto c = corners(f);
+    const std::vector<vertex_descriptor> nodes = nodes_crossing(f);
+    if (nodes.empty()) return ops;
+    Point3d n;
+    if (!unit_normal(f, n)) return ops;
     const double eps = clearance(f, n);
     if (eps < 0) return ops;
     double dmin = 0, dmax = 0;
@@ -668,7 +687,9 @@ class Deintersector {
     }
     if (o_.group) group_ops(vertices, through, ops);
     for (face_descriptor f : faces) cheapest_valid(lift_ops(f), ops);
-    if (ops.empty() && o_.pair) pair_ops(intersecting, ops);  // the last resort, see pair_ops
+    if (ops.empty() && o_.group)  // the last resorts, see push_ops and pair_ops
+      for (face_descriptor f : intersecting) cheapest_valid(push_ops(f), ops);
+    if (ops.empty() && o_.pair) pair_ops(intersecting, ops);
     return ops;
   }
 
@@ -717,6 +738,44 @@ class Deintersector {
       op.cost = move_cost(op);
       if (try_op(op, false) > 0) ops.push_back(op);
     }
+  }
+
+  /// Pushes (ours; a group move, tried only when no other operation
+  /// applies): face lifting reversed. Where f is large and the faces
+  /// crossing it are a fan of small ones lying almost in its plane (CAD:
+  /// two nearly coplanar patches overlapping at a shallow angle), lifting f
+  /// past all the nodes moves f far and into its other neighbours, and no
+  /// node alone clears f. Instead the nodes on one side of f's plane all
+  /// move along f's normal to ε on the other side, ε the hammer's rule at
+  /// the shortest edge among them (one ε for the group, so a face whose
+  /// corners all move keeps its shape); both sides are candidates.
+  std::vector<Op> push_ops(face_descriptor f) const {
+    std::vector<Op> ops;
+    const std::vector<vertex_descriptor> nodes = nodes_crossing(f);
+    Point3d n;
+    if (nodes.size() < 2 || !unit_normal(f, n)) return ops;
+    const Point3d t1 = p3(corners(f)[0]);
+    for (const double side : {1.0, -1.0}) {
+      std::vector<vertex_descriptor> moving;
+      double shortest = std::numeric_limits<double>::infinity();
+      for (vertex_descriptor x : nodes) {
+        if (side * dot(sub(p3(x), t1), n) <= 0) continue;
+        moving.push_back(x);
+        shortest = std::min(shortest, shortest_edge(x));
+      }
+      if (moving.size() < 2) continue;  // one node: a hammer's through move
+      Op op;
+      op.kind = OpKind::group;
+      for (vertex_descriptor x : moving) {
+        const Point3d p = p3(x);
+        const double step = dot(sub(p, t1), n) + side * edge_clearance(shortest);
+        const auto to = least_move(x, {Point(p[0] - step * n[0], p[1] - step * n[1], p[2] - step * n[2])});
+        if (!to) break;
+        op.moves.push_back({x, *to});
+      }
+      if (op.moves.size() == moving.size()) ops.push_back(op);
+    }
+    return ops;
   }
 
   /// The centroid of v's neighbours (one step of umbrella smoothing).

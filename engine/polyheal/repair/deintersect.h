@@ -13,8 +13,10 @@
 //                 hammer (§4.3) on their vertices, face lift (§4.4) on the
 //                 faces themselves, plus our group move (a connected set of
 //                 vertices poking through faces, moved back at once) and,
-//                 when nothing else applies, our pair move (a corner of
-//                 each of two crossing faces smoothed at once) —
+//                 when nothing else applies, our push (the nodes on one
+//                 side of a face moved past it, a group move too) and pair
+//                 move (a corner of each of two crossing faces smoothed at
+//                 once) —
 //                 measures the volume it sweeps and retracts it; the
 //                 implementation phase applies them in ascending cost,
 //                 each re-validated on the current mesh.
