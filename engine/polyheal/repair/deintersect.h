@@ -16,10 +16,9 @@
 //                 when nothing else applies, our push (the nodes on one
 //                 side of a face moved past it, a group move too) and pair
 //                 move (a corner of each of two crossing faces smoothed at
-//                 once) —
-//                 measures the volume it sweeps and retracts it; the
-//                 implementation phase applies them in ascending cost,
-//                 each re-validated on the current mesh.
+//                 once) — measures the volume it sweeps and retracts it;
+//                 the implementation phase applies them in ascending
+//                 cost, each re-validated on the current mesh.
 //                 Rounds repeat until nothing applies.
 //   3. certify    the mesh as written (doubles) is checked exactly: the
 //                 intersecting faces left, degenerate faces, topology, the
