@@ -284,7 +284,7 @@ class Pipeline {
 
   void after_slice(const detail::SliceResult& s) {
     index_.update(s.faces);
-    decimator_.reattach(s.faces);
+    decimator_.reattach(s.faces, s.parents);
     note_size();
   }
 

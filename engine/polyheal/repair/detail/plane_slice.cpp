@@ -288,8 +288,10 @@ class Slicer {
       const face_descriptor other = mesh_.face(mesh_.opposite(d));
       inherit(other, parent);
       result_.faces.push_back(other);
+      result_.parents.push_back(parent);
     }
     result_.faces.push_back(piece);
+    result_.parents.push_back(parent);
   }
 
   void inherit(face_descriptor child, face_descriptor parent) {

@@ -69,6 +69,7 @@ struct SliceResult {
   std::size_t faces_cut = 0;
   bool rejected = false;  // verify found a would-be cap; nothing was changed
   std::vector<face_descriptor> faces;  // every face created or reshaped
+  std::vector<face_descriptor> parents;  // for each of `faces`, the face it was cut from
   std::vector<vertex_descriptor> vertices;  // the split points
 };
 

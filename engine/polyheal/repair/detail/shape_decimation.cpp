@@ -508,15 +508,20 @@ struct ShapeDecimator::Impl {
     }
   }
 
-  void reattach(const std::vector<face_descriptor>& faces) {
-    std::vector<Point3d> points;
-    for (face_descriptor f : faces) {
-      auto it = attached.find(static_cast<std::uint32_t>(f));
+  /// A slice tiles each face it cuts exactly with its pieces, so a point
+  /// attached to the face is nearest to one of those pieces: only they are
+  /// searched (searching every face of the slice made reattaching quadratic
+  /// in the slice's size).
+  void reattach(const std::vector<face_descriptor>& faces, const std::vector<face_descriptor>& parents) {
+    std::unordered_map<std::uint32_t, std::vector<face_descriptor>> pieces;
+    for (std::size_t i = 0; i < faces.size(); ++i) pieces[static_cast<std::uint32_t>(parents[i])].push_back(faces[i]);
+    for (const auto& [parent, children] : pieces) {
+      auto it = attached.find(parent);
       if (it == attached.end()) continue;
-      points.insert(points.end(), it->second.begin(), it->second.end());
+      std::vector<Point3d> points = std::move(it->second);
       attached.erase(it);
+      attach(points, children);
     }
-    attach(points, faces);
   }
 };
 
@@ -533,7 +538,9 @@ void ShapeDecimator::run(const std::vector<face_descriptor>& faces, const std::v
   impl_->sticky.clear();
 }
 void ShapeDecimator::simplify(const std::vector<vertex_descriptor>& vertices) { impl_->simplify(vertices); }
-void ShapeDecimator::reattach(const std::vector<face_descriptor>& faces) { impl_->reattach(faces); }
+void ShapeDecimator::reattach(const std::vector<face_descriptor>& faces, const std::vector<face_descriptor>& parents) {
+  impl_->reattach(faces, parents);
+}
 bool ShapeDecimator::is_bad(face_descriptor f) const { return impl_->is_bad(f); }
 const DecimationStats& ShapeDecimator::stats() const { return impl_->stats; }
 

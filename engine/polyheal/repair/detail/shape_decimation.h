@@ -82,9 +82,10 @@ class ShapeDecimator {
   /// the intersection curve after each slicing").
   void simplify(const std::vector<vertex_descriptor>& vertices);
 
-  /// After another operation (a slice) reshaped `faces`: the vertices
-  /// attached to them are re-attached to the nearest of them.
-  void reattach(const std::vector<face_descriptor>& faces);
+  /// After a slice cut each of `parents` into the faces beside it in
+  /// `faces` (a face may be its own parent): the points attached to a parent
+  /// are re-attached to the nearest of its pieces.
+  void reattach(const std::vector<face_descriptor>& faces, const std::vector<face_descriptor>& parents);
 
   bool is_bad(face_descriptor f) const;
   const DecimationStats& stats() const;
