@@ -6,6 +6,7 @@
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <array>
@@ -124,49 +125,67 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
     piece.best = piece.near[0];
     stack.push_back(piece);
   }
-  while (!stack.empty()) {
-    Piece piece = stack.back();
-    stack.pop_back();
-    const std::array<double, 3> edge{norm(piece.p[1], piece.p[2]), norm(piece.p[2], piece.p[0]),
-                                     norm(piece.p[0], piece.p[1])};  // edge k is opposite corner k
-    const int k = static_cast<int>(std::max_element(edge.begin(), edge.end()) - edge.begin());
-    // All corners skipped: a point of the piece that is not skipped lies
-    // beyond a crossing of `to` on its segment to a corner, so within the
-    // longest edge of `to`; and the piece cannot reach `to` at all when its
-    // corners are farther than that edge.
-    if (piece.skipped[0] && piece.skipped[1] && piece.skipped[2]) {
-      if (edge[k] <= lower + error_bound || *std::min_element(piece.d.begin(), piece.d.end()) > edge[k]) continue;
-      // Input running just inside `to` over a large area would take pieces
-      // of the error bound's size: past a budget, such a piece counts with
-      // its bound (the result then over-estimates, never under-estimates).
-      if (++skipped_splits > kSkippedSplitBudget) {
-        lower = std::max(lower, edge[k]);
-        continue;
+  // Bisection of a stack of pieces against a lower bound it raises.
+  auto drain = [&](std::vector<Piece>& stack, double& lower, std::size_t& skipped_splits) {
+    while (!stack.empty()) {
+      Piece piece = stack.back();
+      stack.pop_back();
+      const std::array<double, 3> edge{norm(piece.p[1], piece.p[2]), norm(piece.p[2], piece.p[0]),
+                                       norm(piece.p[0], piece.p[1])};  // edge k is opposite corner k
+      const int k = static_cast<int>(std::max_element(edge.begin(), edge.end()) - edge.begin());
+      // All corners skipped: a point of the piece that is not skipped lies
+      // beyond a crossing of `to` on its segment to a corner, so within the
+      // longest edge of `to`; and the piece cannot reach `to` at all when its
+      // corners are farther than that edge.
+      if (piece.skipped[0] && piece.skipped[1] && piece.skipped[2]) {
+        if (edge[k] <= lower + error_bound || *std::min_element(piece.d.begin(), piece.d.end()) > edge[k]) continue;
+        // Input running just inside `to` over a large area would take pieces
+        // of the error bound's size: past a budget, such a piece counts with
+        // its bound (the result then over-estimates, never under-estimates).
+        if (++skipped_splits > kSkippedSplitBudget) {
+          lower = std::max(lower, edge[k]);
+          continue;
+        }
       }
+      // 1-Lipschitz bound first (free), then the convexity bound
+      if (*std::min_element(piece.d.begin(), piece.d.end()) + edge[k] <= lower + error_bound) continue;
+      if (upper_bound(piece) <= lower + error_bound) continue;
+      const int i = (k + 1) % 3, j = (k + 2) % 3;  // the longest edge runs from corner i to corner j
+      Point3d m;
+      for (int c = 0; c < 3; ++c) m[c] = 0.5 * (piece.p[i][c] + piece.p[j][c]);
+      if (m == piece.p[i] || m == piece.p[j]) continue;  // no double left between them
+      const auto [dm2, near] = to.nearest(m, piece.best);
+      const double dm = std::sqrt(dm2);
+      const bool skip_m = skip && (*skip)(m);
+      if (!skip_m) lower = std::max(lower, dm);
+      Piece a = piece, b = piece;
+      a.p[j] = m;
+      a.d[j] = dm;
+      a.near[j] = near;
+      a.skipped[j] = skip_m;
+      b.p[i] = m;
+      b.d[i] = dm;
+      b.near[i] = near;
+      b.skipped[i] = skip_m;
+      stack.push_back(a);
+      stack.push_back(b);
     }
-    // 1-Lipschitz bound first (free), then the convexity bound
-    if (*std::min_element(piece.d.begin(), piece.d.end()) + edge[k] <= lower + error_bound) continue;
-    if (upper_bound(piece) <= lower + error_bound) continue;
-    const int i = (k + 1) % 3, j = (k + 2) % 3;  // the longest edge runs from corner i to corner j
-    Point3d m;
-    for (int c = 0; c < 3; ++c) m[c] = 0.5 * (piece.p[i][c] + piece.p[j][c]);
-    if (m == piece.p[i] || m == piece.p[j]) continue;  // no double left between them
-    const auto [dm2, near] = to.nearest(m, piece.best);
-    const double dm = std::sqrt(dm2);
-    const bool skip_m = skip && (*skip)(m);
-    if (!skip_m) lower = std::max(lower, dm);
-    Piece a = piece, b = piece;
-    a.p[j] = m;
-    a.d[j] = dm;
-    a.near[j] = near;
-    a.skipped[j] = skip_m;
-    b.p[i] = m;
-    b.d[i] = dm;
-    b.near[i] = near;
-    b.skipped[i] = skip_m;
-    stack.push_back(a);
-    stack.push_back(b);
+  };
+  if (skip) {  // one shared stack: the split budget is global
+    drain(stack, lower, skipped_splits);
+    return lower;
   }
+  // Each triangle on its own, from the corners' bound, in parallel: the
+  // result does not depend on the scheduling (a triangle never sees a bound
+  // another raised, which costs a few more splits than the serial order).
+  const double corners_bound = lower;
+  std::vector<double> found(stack.size(), corners_bound);
+  tbb::parallel_for(std::size_t(0), stack.size(), [&](std::size_t i) {
+    std::vector<Piece> own{stack[i]};
+    std::size_t unused = 0;
+    drain(own, found[i], unused);
+  });
+  for (double d : found) lower = std::max(lower, d);
   return lower;
 }
 
@@ -321,8 +340,11 @@ std::array<double, 2> one_sided_distances(const Soup& a, const Soup& b, double e
   std::set_difference(sa.begin(), sa.end(), sb.begin(), sb.end(), std::back_inserter(only_a));
   std::set_difference(sb.begin(), sb.end(), sa.begin(), sa.end(), std::back_inserter(only_b));
   if ((ta.empty() && !only_b.empty()) || (tb.empty() && !only_a.empty())) return {-1.0, -1.0};
-  const double ab = only_a.empty() ? 0.0 : one_sided(only_a, SurfaceDistance(tb), error_bound);
-  const double ba = only_b.empty() ? 0.0 : one_sided(only_b, SurfaceDistance(ta), error_bound);
+  // The two directions are independent (each builds its own tree): one per
+  // core, deterministic whatever the scheduling.
+  double ab = 0.0, ba = 0.0;
+  tbb::parallel_invoke([&] { if (!only_a.empty()) ab = one_sided(only_a, SurfaceDistance(tb), error_bound); },
+                       [&] { if (!only_b.empty()) ba = one_sided(only_b, SurfaceDistance(ta), error_bound); });
   return {ab, ba};
 }
 
