@@ -125,11 +125,12 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
     piece.best = piece.near[0];
     stack.push_back(piece);
   }
-  // Bisection of a stack of pieces against a lower bound it raises.
-  auto drain = [&](std::vector<Piece>& stack, double& lower, std::size_t& skipped_splits) {
-    while (!stack.empty()) {
-      Piece piece = stack.back();
-      stack.pop_back();
+  // Bisects the pieces of `work` against the lower bound `bound`, which it
+  // raises. (The split budget is touched only with `skip`: serial.)
+  auto drain = [&](std::vector<Piece>& work, double& bound) {
+    while (!work.empty()) {
+      Piece piece = work.back();
+      work.pop_back();
       const std::array<double, 3> edge{norm(piece.p[1], piece.p[2]), norm(piece.p[2], piece.p[0]),
                                        norm(piece.p[0], piece.p[1])};  // edge k is opposite corner k
       const int k = static_cast<int>(std::max_element(edge.begin(), edge.end()) - edge.begin());
@@ -138,18 +139,18 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
       // longest edge of `to`; and the piece cannot reach `to` at all when its
       // corners are farther than that edge.
       if (piece.skipped[0] && piece.skipped[1] && piece.skipped[2]) {
-        if (edge[k] <= lower + error_bound || *std::min_element(piece.d.begin(), piece.d.end()) > edge[k]) continue;
+        if (edge[k] <= bound + error_bound || *std::min_element(piece.d.begin(), piece.d.end()) > edge[k]) continue;
         // Input running just inside `to` over a large area would take pieces
         // of the error bound's size: past a budget, such a piece counts with
         // its bound (the result then over-estimates, never under-estimates).
         if (++skipped_splits > kSkippedSplitBudget) {
-          lower = std::max(lower, edge[k]);
+          bound = std::max(bound, edge[k]);
           continue;
         }
       }
       // 1-Lipschitz bound first (free), then the convexity bound
-      if (*std::min_element(piece.d.begin(), piece.d.end()) + edge[k] <= lower + error_bound) continue;
-      if (upper_bound(piece) <= lower + error_bound) continue;
+      if (*std::min_element(piece.d.begin(), piece.d.end()) + edge[k] <= bound + error_bound) continue;
+      if (upper_bound(piece) <= bound + error_bound) continue;
       const int i = (k + 1) % 3, j = (k + 2) % 3;  // the longest edge runs from corner i to corner j
       Point3d m;
       for (int c = 0; c < 3; ++c) m[c] = 0.5 * (piece.p[i][c] + piece.p[j][c]);
@@ -157,7 +158,7 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
       const auto [dm2, near] = to.nearest(m, piece.best);
       const double dm = std::sqrt(dm2);
       const bool skip_m = skip && (*skip)(m);
-      if (!skip_m) lower = std::max(lower, dm);
+      if (!skip_m) bound = std::max(bound, dm);
       Piece a = piece, b = piece;
       a.p[j] = m;
       a.d[j] = dm;
@@ -167,23 +168,21 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
       b.d[i] = dm;
       b.near[i] = near;
       b.skipped[i] = skip_m;
-      stack.push_back(a);
-      stack.push_back(b);
+      work.push_back(a);
+      work.push_back(b);
     }
   };
   if (skip) {  // one shared stack: the split budget is global
-    drain(stack, lower, skipped_splits);
+    drain(stack, lower);
     return lower;
   }
   // Each triangle on its own, from the corners' bound, in parallel: the
   // result does not depend on the scheduling (a triangle never sees a bound
   // another raised, which costs a few more splits than the serial order).
-  const double corners_bound = lower;
-  std::vector<double> found(stack.size(), corners_bound);
+  std::vector<double> found(stack.size(), lower);
   tbb::parallel_for(std::size_t(0), stack.size(), [&](std::size_t i) {
     std::vector<Piece> own{stack[i]};
-    std::size_t unused = 0;
-    drain(own, found[i], unused);
+    drain(own, found[i]);
   });
   for (double d : found) lower = std::max(lower, d);
   return lower;
