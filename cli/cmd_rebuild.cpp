@@ -34,6 +34,7 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
       {"parameters",
        {{"cell", r.cell}, {"cell_rule", r.cell_rule}, {"feature_angle", a.options.feature_angle},
         {"simplify", a.options.simplify}, {"sharpen", a.options.sharpen}, {"keep_clean", a.options.keep_clean},
+        {"keep_regions", a.options.keep_regions},
         {"sheets", a.sheets}}},
       {"input_mesh",
        {{"faces", r.faces},
@@ -59,6 +60,9 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
         {"interpolated", r.interpolated}}},
       {"output_mesh",
        {{"extracted_faces", r.extracted_faces},
+        {"kept_faces", r.kept_faces},
+        {"kept_patches", r.kept_patches},
+        {"patches_given_up", r.patches_given_up},
         {"planar_collapses", r.collapses},
         {"decimated", r.decimated},
         {"sharpened", r.sharpened},
@@ -137,6 +141,10 @@ void print_text(const RebuildArgs& a, const RebuildReport& r) {
       if (!r.open_loops.empty()) std::printf("  open loops: %s\n", where(r.open_loops, "edges").c_str());
       return;
     }
+    if (a.options.keep_regions)
+      std::printf("  clean regions: %zu input faces kept exactly, in %zu patches zipped to the grid surface; %zu "
+                  "patches given up (grid surface there)\n",
+                  r.kept_faces, r.kept_patches, r.patches_given_up);
     std::printf("  output: %zu faces extracted, %zu planar vertices collapsed, %zu decimated -> %zu faces, %zu "
                 "vertices, %zu components, %zu face groups\n",
                 r.extracted_faces, r.collapses, r.decimated, r.faces_out, r.vertices_out, r.components_out,
@@ -186,7 +194,9 @@ void add_rebuild(CLI::App& app, int& exit_code) {
       "side, unless --sheets drop. The output is the boundary of the inside corners\n"
       "(marching tetrahedra), its vertices on the exact crossings of grid edges with\n"
       "facets, interpolated across gaps, holes and shells: closed, 2-manifold and\n"
-      "oriented by construction. Planar regions are coarsened without moving the\n"
+      "oriented by construction. Input faces far from every defect are kept exactly\n"
+      "and zipped to it (--no-keep rebuilds them too; a patch whose zip the exact\n"
+      "oracle rejects is left to the grid). Planar regions are coarsened without moving the\n"
       "surface, the rest decimated within a quarter cell (each collapse checked\n"
       "exactly for self-intersection). Faces are grouped by the input's groups (OBJ\n"
       "g, STL solids), else by --feature-angle (OBJ output keeps them). A clean input\n"
@@ -208,6 +218,9 @@ void add_rebuild(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-simplify{false}", args->options.simplify,
                 "keep every extracted triangle (no planar coarsening, no decimation)");
   cmd->add_flag("--always{false}", args->options.keep_clean, "rebuild even an input that is already clean");
+  cmd->add_flag("--no-keep{false}", args->options.keep_regions,
+                "rebuild clean regions too (by default input faces far from every defect are kept exactly and "
+                "zipped to the grid surface)");
   cmd->add_flag("--no-sharpen{false}", args->options.sharpen,
                 "leave sharp edges chamfered (no moving of vertices onto the input's edges and corners)");
   cmd->add_option("--sheets", args->sheets,

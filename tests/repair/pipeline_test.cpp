@@ -135,12 +135,14 @@ TEST_CASE("repair: a result with no face left is never kept (a double-sided shee
 
 TEST_CASE("repair --for tetgen: what the grid leaves folded is fixed after it, and TetGen meshes the result",
           "[pipeline][tetgen]") {
-  // Corpus soups only the grid closes. Its feature placement folds a few
-  // faces below TetGen's 0.1 degrees (deer_bound: spikes, collapsed); in the
-  // chair's thin gaps it leaves closed tetrahedra folded flat (no collapse
-  // can fix a tetrahedron: they are removed, being within a cell); on
-  // ALSTOM_TEST4 its coarsening leaves a vertex 1e-14 from an edge it is not
-  // on (tetgen -p aborts), which the grid without coarsening avoids.
+  // Corpus soups only the grid closes. In the chair's thin gaps it leaves
+  // closed tetrahedra folded flat (no collapse can fix a tetrahedron: they
+  // are removed, being within a cell); on ALSTOM_TEST4 its coarsening leaves
+  // a vertex 1e-14 from an edge it is not on (tetgen -p aborts), which the
+  // grid without coarsening avoids. On deer_bound its feature placement used
+  // to fold a few faces below TetGen's 0.1 degrees (spikes); since rebuild
+  // keeps clean regions as they are, the grid's result is TetGen-ready there
+  // by itself — the file is still checked below.
   for (const char* name :
        {"corpus/vhacd__deer_bound.off", "corpus/trimesh__chair_model.obj", "corpus/cgal__ALSTOM_TEST4.off"}) {
     INFO(name);
@@ -150,7 +152,8 @@ TEST_CASE("repair --for tetgen: what the grid leaves folded is fixed after it, a
     const RepairResult r = repair(in, o);
     CHECK(ran(r.report, "rebuild", true));
     // the grid alone was not TetGen-ready: a later stage made it so
-    CHECK((ran(r.report, "degenerate (TetGen tolerances)", true) || ran(r.report, "rebuild (not coarsened)", true)));
+    if (std::string(name) != "corpus/vhacd__deer_bound.off")
+      CHECK((ran(r.report, "degenerate (TetGen tolerances)", true) || ran(r.report, "rebuild (not coarsened)", true)));
     std::string stem = std::string(name).substr(7);  // TetGen takes the name up to its first dot
     stem = stem.substr(0, stem.find('.'));
     const std::string p = test::scratch("tg_" + stem + ".off");

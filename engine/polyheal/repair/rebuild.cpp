@@ -619,6 +619,545 @@ class Extractor {
 namespace {
 
 // ---------------------------------------------------------------------------
+// Keeping clean regions (the step beyond the paper's §5: the grid
+// re-tessellates everything, so regions that were already clean come out
+// moved by up to a quarter cell). A facet is kept, with its exact input
+// coordinates, when it is far from every defect: each of its edges is used
+// by two facets in opposite directions, its corners are manifold, it
+// intersects no other facet, it bounds the volume (winding number ~0 in
+// front of it and ~1 behind) and no facet that fails these tests comes
+// within two cells of its corners. Kept facets join into patches across
+// their edges. The grid faces a patch covers (a corner within half a cell of
+// it, facing the same way) are taken out — with the faces that would jut into
+// the hole or pinch it at a vertex — and each boundary loop of the patch is
+// zipped to the loop of the hole this leaves (Turk & Levoy's zippering: one
+// strip of triangles advancing along both loops, the shorter new diagonal
+// first). A patch is given up, and its grid faces come back, when its loops
+// and the holes' do not pair one to one, a loop is not simple, two patches'
+// holes touch (the smaller goes), a strip triangle would be degenerate, a
+// kept point coincides with a grid vertex, the joined surface is not a
+// closed 2-manifold at some vertex, or — decided exactly by the oracle on the
+// joined surface — a kept or strip face intersects anything. Kept vertices
+// are frozen in coarsening, sharpening and decimation.
+
+struct KeptRegions {
+  std::size_t faces = 0, patches = 0, given_up = 0;
+  std::vector<Point3d> points;  // kept points, sorted (frozen downstream)
+  bool frozen(const Point3d& p) const { return std::binary_search(points.begin(), points.end(), p); }
+};
+
+constexpr Index kNoIndex = ~Index(0);
+
+std::uint64_t edge_key(Index a, Index b) { return (std::uint64_t(a) << 32) | std::uint64_t(b); }
+
+/// The simple loops of directed boundary edges (a -> b), each as its vertex
+/// sequence; false when some vertex starts two of them (not simple).
+bool trace_loops(const std::vector<std::array<Index, 2>>& edges, std::vector<std::vector<Index>>& loops) {
+  std::unordered_map<Index, Index> next;
+  for (const auto& e : edges)
+    if (!next.emplace(e[0], e[1]).second) return false;
+  std::unordered_map<Index, char> done;
+  for (const auto& e : edges) {
+    if (done.count(e[0])) continue;
+    std::vector<Index> loop;
+    Index v = e[0];
+    while (!done.count(v)) {
+      done.emplace(v, 1);
+      loop.push_back(v);
+      const auto it = next.find(v);
+      if (it == next.end()) return false;
+      v = it->second;
+    }
+    if (v != e[0]) return false;
+    loops.push_back(std::move(loop));
+  }
+  return true;
+}
+
+KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, double h,
+                               std::vector<OutVertex>& vertices, std::vector<Tri>& tris) {
+  KeptRegions kept;
+  const std::size_t T = f.tris.size();
+  // Edges: uses in each direction and the two facets of a good edge.
+  struct Use {
+    int forward = 0, backward = 0;
+    std::uint32_t t[2] = {0, 0};
+  };
+  std::unordered_map<std::uint64_t, Use> uses;
+  std::vector<std::vector<std::uint32_t>> star(f.points.size());
+  for (std::size_t t = 0; t < T; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const Index a = f.tris[t][k], b = f.tris[t][(k + 1) % 3];
+      Use& u = uses[edge_key(std::min(a, b), std::max(a, b))];
+      int& n = a < b ? u.forward : u.backward;
+      if (n == 0) u.t[a < b ? 0 : 1] = static_cast<std::uint32_t>(t);
+      ++n;
+      star[a].push_back(static_cast<std::uint32_t>(t));
+    }
+  auto good_edge = [&](Index a, Index b) {
+    const Use& u = uses.at(edge_key(std::min(a, b), std::max(a, b)));
+    return u.forward == 1 && u.backward == 1;
+  };
+  auto across = [&](std::uint32_t t, Index a, Index b) {  // the other facet of good edge ab
+    const Use& u = uses.at(edge_key(std::min(a, b), std::max(a, b)));
+    return u.t[0] == t ? u.t[1] : u.t[0];
+  };
+  // A good vertex: every edge at it good, its facets one fan around it.
+  std::vector<char> good_vertex(f.points.size(), 0);
+  tbb::parallel_for(std::size_t(0), f.points.size(), [&](std::size_t v) {
+    if (star[v].empty()) return;
+    for (std::uint32_t t : star[v])
+      for (int k = 0; k < 3; ++k)
+        if (f.tris[t][k] == v && !good_edge(f.tris[t][k], f.tris[t][(k + 1) % 3])) return;
+    // walk the fan: leave each facet across its edge into v
+    std::uint32_t t = star[v][0];
+    std::size_t steps = 0;
+    do {
+      int k = 0;
+      while (f.tris[t][k] != v) ++k;
+      const Index prev = f.tris[t][(k + 2) % 3];
+      t = across(t, prev, Index(v));
+      ++steps;
+    } while (t != star[v][0] && steps <= star[v].size());
+    good_vertex[v] = steps == star[v].size();
+  });
+  std::vector<char> ok(T, 1);
+  {
+    Soup s;
+    s.points = f.points;
+    for (const Tri& t : f.tris) s.add_triangle(t[0], t[1], t[2]);
+    for (const FacePair& p : find_self_intersections(s)) ok[p.first] = ok[p.second] = 0;
+  }
+  tbb::parallel_for(std::size_t(0), T, [&](std::size_t t) {
+    const Tri& tr = f.tris[t];
+    if (!ok[t] || (!f.sheet.empty() && f.sheet[t]) || !good_vertex[tr[0]] || !good_vertex[tr[1]] ||
+        !good_vertex[tr[2]]) {
+      ok[t] = 0;
+      return;
+    }
+    const Point3d &a = f.points[tr[0]], &b = f.points[tr[1]], &c = f.points[tr[2]];
+    const Point3d n = normal(a, b, c);
+    const double e = 0.05 * h / std::sqrt(dot(n, n));
+    Point3d front, back;
+    for (int k = 0; k < 3; ++k) {
+      const double m = (a[k] + b[k] + c[k]) / 3;
+      front[k] = m + e * n[k];
+      back[k] = m - e * n[k];
+    }
+    ok[t] = winding(front) < 0.25 && winding(back) > 0.75;
+  });
+  std::vector<std::array<Point3d, 3>> bad;
+  for (std::size_t t = 0; t < T; ++t)
+    if (!ok[t]) bad.push_back({f.points[f.tris[t][0]], f.points[f.tris[t][1]], f.points[f.tris[t][2]]});
+  if (!bad.empty()) {
+    const detail::SurfaceDistance to_bad(bad);
+    const double margin = 2 * h;
+    std::vector<char> near(T, 0);
+    tbb::parallel_for(std::size_t(0), T, [&](std::size_t t) {
+      if (!ok[t]) return;
+      for (int k = 0; k < 3; ++k)
+        if (to_bad.squared_distance(f.points[f.tris[t][k]]) <= margin * margin) near[t] = 1;
+    });
+    for (std::size_t t = 0; t < T; ++t)
+      if (near[t]) ok[t] = 0;
+  }
+  // A vertex where kept facets meet in more than one fan would pinch the
+  // joined surface: the kept facets around it are let go, until none is left.
+  for (bool again = true; again;) {
+    again = false;
+    std::vector<int> starts(f.points.size(), 0);
+    for (std::size_t t = 0; t < T; ++t)
+      if (ok[t])
+        for (int k = 0; k < 3; ++k)
+          if (!ok[across(std::uint32_t(t), f.tris[t][k], f.tris[t][(k + 1) % 3])]) ++starts[f.tris[t][k]];
+    for (std::size_t v = 0; v < f.points.size(); ++v)
+      if (starts[v] > 1)
+        for (std::uint32_t t : star[v]) {
+          again = again || ok[t];
+          ok[t] = 0;
+        }
+  }
+  // Patches: kept facets joined across their edges.
+  UnionFind join(T);
+  for (std::size_t t = 0; t < T; ++t)
+    if (ok[t])
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t o = across(std::uint32_t(t), f.tris[t][k], f.tris[t][(k + 1) % 3]);
+        if (ok[o]) join.unite(t, o);
+      }
+  std::vector<std::int64_t> patch(T, -1);
+  std::unordered_map<std::size_t, std::int64_t> patch_of_root;
+  std::vector<std::uint32_t> kept_tris;  // indices into f.tris
+  for (std::size_t t = 0; t < T; ++t)
+    if (ok[t]) {
+      patch[t] = patch_of_root.emplace(join.find(t), std::int64_t(patch_of_root.size())).first->second;
+      kept_tris.push_back(static_cast<std::uint32_t>(t));
+    }
+  const std::size_t P = patch_of_root.size();
+  if (P == 0) return kept;
+  // Grid vertices a patch covers: within a cell of it, facing the same way.
+  std::vector<Point3d> vnormal(vertices.size(), Point3d{0, 0, 0});
+  for (const Tri& t : tris) {
+    const Point3d n = normal(vertices[t[0]].p, vertices[t[1]].p, vertices[t[2]].p);
+    for (Index v : t)
+      for (int k = 0; k < 3; ++k) vnormal[v][k] += n[k];
+  }
+  std::vector<std::array<Point3d, 3>> kept_corners;
+  for (std::uint32_t t : kept_tris) kept_corners.push_back({f.points[f.tris[t][0]], f.points[f.tris[t][1]], f.points[f.tris[t][2]]});
+  const detail::SurfaceDistance to_kept(kept_corners);
+  std::vector<std::int64_t> covered(vertices.size(), -1);
+  tbb::parallel_for(std::size_t(0), vertices.size(), [&](std::size_t v) {
+    const auto [d2, i] = to_kept.nearest(vertices[v].p);
+    if (d2 > 0.25 * h * h) return;  // half a cell
+    const Tri& tr = f.tris[kept_tris[i]];
+    const Point3d n = normal(f.points[tr[0]], f.points[tr[1]], f.points[tr[2]]);
+    if (dot(n, vnormal[v]) > 0.5 * std::sqrt(dot(n, n) * dot(vnormal[v], vnormal[v]))) covered[v] = patch[kept_tris[i]];
+  });
+  // Each patch's boundary loops (kept facets on the left), once.
+  std::vector<std::vector<std::array<Index, 2>>> patch_edges(P);
+  for (std::uint32_t t : kept_tris)
+    for (int k = 0; k < 3; ++k) {
+      const Index a = f.tris[t][k], b = f.tris[t][(k + 1) % 3];
+      if (patch[across(t, a, b)] != patch[t]) patch_edges[std::size_t(patch[t])].push_back({a, b});
+    }
+  std::vector<char> give_up(P, 0);
+  std::vector<std::vector<std::vector<Index>>> patch_loops(P);
+  for (std::size_t p = 0; p < P; ++p)
+    if (!trace_loops(patch_edges[p], patch_loops[p])) give_up[p] = 1;
+  {  // a kept point on two patches (they touch at a corner) would pinch: give up both
+    std::unordered_map<Index, std::size_t> owner;
+    for (std::uint32_t t : kept_tris)
+      for (Index v : f.tris[t]) {
+        const auto [it, added] = owner.emplace(v, std::size_t(patch[t]));
+        if (!added && it->second != std::size_t(patch[t])) give_up[it->second] = give_up[std::size_t(patch[t])] = 1;
+      }
+  }
+  std::unordered_map<std::uint64_t, std::uint32_t> grid_halfedge;  // a -> b: its grid triangle
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) grid_halfedge.emplace(edge_key(tris[t][k], tris[t][(k + 1) % 3]), std::uint32_t(t));
+  std::vector<Point3d> grid_points;
+  for (const OutVertex& v : vertices) grid_points.push_back(v.p);
+  std::sort(grid_points.begin(), grid_points.end());
+
+  std::vector<std::vector<std::uint32_t>> grid_star(vertices.size());
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (Index v : tris[t]) grid_star[v].push_back(static_cast<std::uint32_t>(t));
+  std::vector<std::size_t> size(P, 0);  // kept facets per patch
+  for (std::uint32_t t : kept_tris) ++size[std::size_t(patch[t])];
+  std::vector<OutVertex> out_vertices;
+  std::vector<Tri> out_tris;
+  for (int round = 0; round < 12; ++round) {
+    std::vector<char> fails = give_up;
+    // Grid faces taken out, by patch.
+    std::vector<std::int64_t> removed(tris.size(), -1);
+    for (std::size_t t = 0; t < tris.size(); ++t)
+      for (Index v : tris[t]) {
+        const std::int64_t p = covered[v];
+        if (p < 0 || give_up[std::size_t(p)]) continue;
+        if (removed[t] >= 0 && removed[t] != p) {  // two patches within reach: the smaller goes
+          fails[std::size_t(size[std::size_t(p)] < size[std::size_t(removed[t])] ? p : removed[t])] = 1;
+        }
+        if (removed[t] < 0 || size[std::size_t(p)] > size[std::size_t(removed[t])]) removed[t] = p;
+      }
+    // Where the hole's boundary passes a grid vertex twice (a neck), the
+    // faces around that vertex go too.
+    for (int pass = 0; pass < 16; ++pass) {
+      std::vector<int> starts(vertices.size(), 0);
+      for (std::size_t t = 0; t < tris.size(); ++t) {
+        if (removed[t] >= 0) continue;
+        for (int k = 0; k < 3; ++k)
+          if (removed[grid_halfedge.at(edge_key(tris[t][(k + 1) % 3], tris[t][k]))] >= 0) ++starts[tris[t][k]];
+      }
+      bool widened = false;
+      // A grid face with two edges on the hole juts into it: it would hide
+      // parts of the hole's loop from the patch's, and the strip between
+      // them would fold over it.
+      for (std::size_t t = 0; t < tris.size(); ++t) {
+        if (removed[t] >= 0) continue;
+        int open = 0;
+        std::int64_t p = -1;
+        for (int k = 0; k < 3; ++k) {
+          const std::int64_t q = removed[grid_halfedge.at(edge_key(tris[t][(k + 1) % 3], tris[t][k]))];
+          if (q >= 0) {
+            ++open;
+            p = q;
+          }
+        }
+        if (open >= 2) {
+          removed[t] = p;
+          widened = true;
+        }
+      }
+      for (std::size_t v = 0; v < vertices.size(); ++v) {
+        if (starts[v] < 2) continue;
+        std::int64_t p = -1;
+        for (std::uint32_t t : grid_star[v]) p = std::max(p, removed[t]);
+        for (std::uint32_t t : grid_star[v])
+          if (removed[t] < 0) {
+            removed[t] = p;
+            widened = true;
+          } else if (removed[t] != p) {
+            fails[std::size_t(removed[t])] = fails[std::size_t(p)] = 1;
+          }
+      }
+      if (!widened) break;
+    }
+    // Two patches' holes may not touch (their loops would run into each
+    // other): the smaller patch goes.
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      if (removed[t] < 0) continue;
+      for (int k = 0; k < 3; ++k)
+        for (std::uint32_t u : grid_star[tris[t][k]]) {
+          const std::int64_t p = removed[t], q = removed[u];
+          if (q >= 0 && q != p) fails[std::size_t(size[std::size_t(p)] < size[std::size_t(q)] ? p : q)] = 1;
+        }
+    }
+    {  // patches in conflict go first; the others are judged without them
+      bool dropped = false;
+      for (std::size_t p = 0; p < P; ++p)
+        if (fails[p] && !give_up[p]) {
+          give_up[p] = 1;
+          dropped = true;
+        }
+      if (dropped) continue;
+    }
+    // The holes' loops (grid faces on the left), by patch.
+    std::vector<std::vector<std::array<Index, 2>>> hole_edges(P);
+    std::vector<std::array<Index, 2>> all_hole_edges;
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      if (removed[t] >= 0) continue;
+      for (int k = 0; k < 3; ++k) {
+        const Index a = tris[t][k], b = tris[t][(k + 1) % 3];
+        const std::int64_t p = removed[grid_halfedge.at(edge_key(b, a))];
+        if (p < 0) continue;
+        hole_edges[std::size_t(p)].push_back({a, b});
+        all_hole_edges.push_back({a, b});
+      }
+    }
+    {  // a grid vertex on two holes' loops
+      std::unordered_map<Index, int> starts;
+      for (const auto& e : all_hole_edges) ++starts[e[0]];
+      for (std::size_t p = 0; p < P; ++p)
+        for (const auto& e : hole_edges[p])
+          if (starts[e[0]] > 1) fails[p] = 1;
+    }
+    // Zip every patch that is still in.
+    out_vertices.clear();
+    out_tris.clear();
+    std::vector<std::int64_t> out_patch;  // per output triangle: its patch (-1: a grid face)
+    std::vector<Index> id(f.points.size(), kNoIndex);
+    std::vector<Index> grid_id(vertices.size(), kNoIndex);
+    auto grid_vertex = [&](Index v) {
+      if (grid_id[v] == kNoIndex) {
+        grid_id[v] = static_cast<Index>(out_vertices.size());
+        out_vertices.push_back(vertices[v]);
+      }
+      return grid_id[v];
+    };
+    auto kept_vertex = [&](Index v, std::uint32_t t) {
+      if (id[v] == kNoIndex) {
+        id[v] = static_cast<Index>(out_vertices.size());
+        out_vertices.push_back({f.points[v], std::int64_t(t)});
+      }
+      return id[v];
+    };
+    std::vector<std::vector<std::array<std::int64_t, 3>>> strip_refs(P);  // >= 0: f point; < 0: -(grid vertex)-1
+    for (std::size_t p = 0; p < P; ++p) {
+      if (fails[p]) continue;
+      std::vector<std::vector<Index>> holes;
+      if (!trace_loops(hole_edges[p], holes) || holes.size() != patch_loops[p].size()) {
+        fails[p] = 1;
+        continue;
+      }
+      for (const auto& loop : patch_loops[p])
+        for (Index v : loop)
+          if (std::binary_search(grid_points.begin(), grid_points.end(), f.points[v])) fails[p] = 1;
+      if (fails[p]) continue;
+      // Pair each loop of the patch with the nearest hole (mean distance of
+      // up to 16 of its points to the hole's points); one to one.
+      std::vector<std::size_t> pair(holes.size());
+      std::vector<char> taken(holes.size(), 0);
+      for (std::size_t i = 0; i < patch_loops[p].size() && !fails[p]; ++i) {
+        const auto& A = patch_loops[p][i];
+        double best = HUGE_VAL;
+        std::size_t at = 0;
+        for (std::size_t j = 0; j < holes.size(); ++j) {
+          double sum = 0;
+          const std::size_t step = std::max<std::size_t>(1, A.size() / 16);
+          for (std::size_t s = 0; s < A.size(); s += step) {
+            double d = HUGE_VAL;
+            for (Index b : holes[j]) d = std::min(d, dist(f.points[A[s]], vertices[b].p));
+            sum += d;
+          }
+          if (sum < best) {
+            best = sum;
+            at = j;
+          }
+        }
+        if (taken[at]) fails[p] = 1;
+        taken[at] = 1;
+        pair[i] = at;
+      }
+      if (fails[p]) continue;
+      // Zip: A runs with the patch on its left, B with the grid on its left,
+      // so they run opposite ways along the strip: advance i on A, j back on B.
+      for (std::size_t i = 0; i < patch_loops[p].size() && !fails[p]; ++i) {
+        const auto& A = patch_loops[p][i];
+        const auto& B = holes[pair[i]];
+        const std::size_t k = A.size(), l = B.size();
+        std::size_t j0 = 0;
+        for (std::size_t j = 1; j < l; ++j)
+          if (dist(f.points[A[0]], vertices[B[j]].p) < dist(f.points[A[0]], vertices[B[j0]].p)) j0 = j;
+        std::size_t ia = 0, jb = 0;
+        auto a_at = [&](std::size_t s) { return A[s % k]; };
+        auto b_at = [&](std::size_t s) { return B[(j0 + l - s % l) % l]; };  // s steps back from j0
+        while (ia < k || jb < l) {
+          const Index a0 = a_at(ia), a1 = a_at(ia + 1), b0 = b_at(jb), b1 = b_at(jb + 1);
+          const bool can_a = ia < k, can_b = jb < l;
+          const bool flat_a = can_a && CGAL::collinear(ipoint(f.points[a1]), ipoint(f.points[a0]), ipoint(vertices[b0].p));
+          const bool flat_b = can_b && CGAL::collinear(ipoint(vertices[b0].p), ipoint(vertices[b1].p), ipoint(f.points[a0]));
+          bool take_a;
+          if (can_a && can_b && !flat_a && !flat_b)
+            take_a = dist(f.points[a1], vertices[b0].p) <= dist(f.points[a0], vertices[b1].p);
+          else if (can_a && !flat_a) take_a = true;
+          else if (can_b && !flat_b) take_a = false;
+          else {
+            fails[p] = 1;
+            break;
+          }
+          if (take_a) {
+            strip_refs[p].push_back({std::int64_t(a1), std::int64_t(a0), -std::int64_t(b0) - 1});
+            ++ia;
+          } else {
+            strip_refs[p].push_back({-std::int64_t(b0) - 1, -std::int64_t(b1) - 1, std::int64_t(a0)});
+            ++jb;
+          }
+        }
+      }
+    }
+    // The joined surface: grid faces not taken out by a zipped patch, the
+    // zipped patches' facets and strips.
+    auto in = [&](std::int64_t p) { return p >= 0 && !fails[std::size_t(p)]; };
+    for (std::size_t t = 0; t < tris.size(); ++t)
+      if (!in(removed[t])) {
+        out_tris.push_back({grid_vertex(tris[t][0]), grid_vertex(tris[t][1]), grid_vertex(tris[t][2])});
+        out_patch.push_back(-1);
+      }
+    for (std::uint32_t t : kept_tris) {
+      const std::int64_t p = patch[t];
+      if (!in(p)) continue;
+      out_tris.push_back({kept_vertex(f.tris[t][0], t), kept_vertex(f.tris[t][1], t), kept_vertex(f.tris[t][2], t)});
+      out_patch.push_back(p);
+    }
+    for (std::size_t p = 0; p < P; ++p) {
+      if (!in(std::int64_t(p))) continue;
+      for (const auto& s : strip_refs[p]) {
+        Tri t;
+        for (int k = 0; k < 3; ++k) t[k] = s[k] >= 0 ? id[std::size_t(s[k])] : grid_vertex(Index(-s[k] - 1));
+        out_tris.push_back(t);
+        out_patch.push_back(std::int64_t(p));
+      }
+    }
+    // The joined surface must be a closed 2-manifold: every edge once in
+    // each direction, every vertex one fan. A patch with a face at a vertex
+    // where that fails is given up (and with none there, every patch).
+    {
+      std::unordered_map<std::uint64_t, int> directed;
+      std::vector<std::vector<std::uint32_t>> around(out_vertices.size());
+      for (std::size_t t = 0; t < out_tris.size(); ++t)
+        for (int k = 0; k < 3; ++k) {
+          ++directed[edge_key(out_tris[t][k], out_tris[t][(k + 1) % 3])];
+          around[out_tris[t][k]].push_back(static_cast<std::uint32_t>(t));
+        }
+      auto fine = [&](Index v) {
+        if (around[v].empty()) return true;
+        for (std::uint32_t t : around[v]) {
+          int k = 0;
+          while (out_tris[t][k] != v) ++k;
+          const Index b = out_tris[t][(k + 1) % 3];
+          const auto ab = directed.find(edge_key(v, b)), ba = directed.find(edge_key(b, v));
+          if (ab->second != 1 || ba == directed.end() || ba->second != 1) return false;
+        }
+        // one fan: from a face, cross the edge (prev, v) into the face that
+        // has v -> prev, until back
+        std::unordered_map<Index, std::uint32_t> by_next;  // v -> b: the face
+        for (std::uint32_t t : around[v]) {
+          int k = 0;
+          while (out_tris[t][k] != v) ++k;
+          by_next.emplace(out_tris[t][(k + 1) % 3], t);
+        }
+        std::uint32_t t = around[v][0];
+        std::size_t steps = 0;
+        do {
+          int k = 0;
+          while (out_tris[t][k] != v) ++k;
+          const auto it = by_next.find(out_tris[t][(k + 2) % 3]);
+          if (it == by_next.end()) return false;
+          t = it->second;
+          ++steps;
+        } while (t != around[v][0] && steps <= around[v].size());
+        return steps == around[v].size();
+      };
+      for (Index v = 0; v < out_vertices.size(); ++v) {
+        if (fine(v)) continue;
+        bool blamed = false;
+        for (std::uint32_t t : around[v])
+          if (out_patch[t] >= 0) {
+            fails[std::size_t(out_patch[t])] = 1;
+            blamed = true;
+          }
+        if (!blamed) std::fill(fails.begin(), fails.end(), 1);
+      }
+    }
+    // Exactly: no kept or strip face may intersect anything.
+    Soup joined;
+    for (const OutVertex& v : out_vertices) joined.points.push_back(v.p);
+    for (const Tri& t : out_tris) joined.add_triangle(t[0], t[1], t[2]);
+    std::vector<char> only(out_tris.size(), 0);
+    for (std::size_t t = 0; t < out_tris.size(); ++t) only[t] = out_patch[t] >= 0;
+    SelfIntersectionOptions so;
+    so.only = &only;
+    bool clean = true;
+    for (std::size_t p = 0; p < P; ++p) clean = clean && !(fails[p] && !give_up[p]);
+    if (clean) {  // (otherwise the next round builds the surface again)
+      for (const FacePair& q : find_self_intersections(joined, so))
+        for (std::size_t t : {q.first, q.second})
+          if (out_patch[t] >= 0) {
+            fails[std::size_t(out_patch[t])] = 1;
+            clean = false;
+          }
+    }
+    bool changed = false;
+    for (std::size_t p = 0; p < P; ++p)
+      if (fails[p] && !give_up[p]) {
+        give_up[p] = 1;
+        changed = true;
+      }
+    if (clean && !changed) break;
+    if (round == 11) {  // still failing: give up every patch
+      std::fill(give_up.begin(), give_up.end(), 1);
+      KeptRegions none;
+      none.given_up = P;
+      return none;
+    }
+  }
+  for (std::size_t p = 0; p < P; ++p) {
+    if (give_up[p]) ++kept.given_up;
+    else ++kept.patches;
+  }
+  for (std::uint32_t t : kept_tris)
+    if (!give_up[std::size_t(patch[t])]) {
+      ++kept.faces;
+      for (Index v : f.tris[t]) kept.points.push_back(f.points[v]);
+    }
+  std::sort(kept.points.begin(), kept.points.end());
+  kept.points.erase(std::unique(kept.points.begin(), kept.points.end()), kept.points.end());
+  vertices = std::move(out_vertices);
+  tris = std::move(out_tris);
+  return kept;
+}
+
+// ---------------------------------------------------------------------------
 // Planar coarsening (the paper's §3.2.4 "faceted geometric faces", and its §5
 // wish for fewer virtual faces): a vertex whose star lies in one facet plane
 // (every star vertex a facet crossing of a facet coplanar with its own,
@@ -852,8 +1391,9 @@ class BoundedDecimation {
  public:
   /// `reference`: the extracted surface the result must stay near; `cell`:
   /// the grid's cell (its triangles' size).
-  BoundedDecimation(Mesh& mesh, const Soup& reference, double tolerance, double cell)
-      : mesh_(mesh), index_(mesh), reference_(reference, std::max(cell, tolerance)), tolerance_(tolerance) {
+  BoundedDecimation(Mesh& mesh, const Soup& reference, double tolerance, double cell, const KeptRegions& kept)
+      : mesh_(mesh), index_(mesh), reference_(reference, std::max(cell, tolerance)), tolerance_(tolerance),
+        kept_(kept) {
     error_ = mesh_.add_property_map<face_descriptor, double>("f:rebuild_error", 0.0).first;
     for (vertex_descriptor v : mesh_.vertices()) at_.push_back(nearest_point3d(mesh_.point(v)));
     moved_.assign(at_.size(), 0);
@@ -886,6 +1426,7 @@ class BoundedDecimation {
     std::size_t moved = 0;
     std::vector<vertex_descriptor> all(mesh_.vertices().begin(), mesh_.vertices().end());
     for (vertex_descriptor v : all) {
+      if (kept_.frozen(at(v))) continue;
       std::vector<std::int64_t> planes;
       auto consider = [&](vertex_descriptor u) {
         const std::int64_t t = facet[u];
@@ -986,6 +1527,7 @@ class BoundedDecimation {
   const Point3d& at(vertex_descriptor v) const { return at_[static_cast<std::size_t>(v)]; }
 
   bool try_collapse(vertex_descriptor v, double limit) {
+    if (kept_.frozen(at(v))) return false;
     std::vector<face_descriptor> star;
     double carried = 0, old_quality = HUGE_VAL;
     for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
@@ -1086,6 +1628,7 @@ class BoundedDecimation {
   LocalIndex index_;
   TriangleGrid reference_;
   double tolerance_;
+  const KeptRegions& kept_;  // their points never move
   std::vector<char> moved_;  // per vertex: sharpened, so no longer on the extracted surface
   Mesh::Property_map<face_descriptor, double> error_;
   std::vector<Point3d> at_;
@@ -1407,13 +1950,26 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     return result;
   }
   r.extracted_faces = tris.size();
+  // The extracted surface, which decimation stays near.
+  Soup extracted;
+  for (const OutVertex& v : vertices) extracted.points.push_back(v.p);
+  for (const Tri& t : tris) extracted.add_triangle(t[0], t[1], t[2]);
+  KeptRegions kept;
+  if (options.keep_regions) {
+    if (obs) obs->stage("keeping clean regions");
+    kept = keep_clean_regions(f, winding, g.h, vertices, tris);
+    r.kept_faces = kept.faces;
+    r.kept_patches = kept.patches;
+    r.patches_given_up = kept.given_up;
+  }
   r.seconds_extract = seconds_since(t0);
 
   t0 = std::chrono::steady_clock::now();
   if (options.simplify) {
     if (obs) obs->stage("coarsening planar regions");
     std::vector<char> on_plane(vertices.size(), 0);
-    for (std::size_t v = 0; v < vertices.size(); ++v) on_plane[v] = vertices[v].facet >= 0 && !vertices[v].clamped;
+    for (std::size_t v = 0; v < vertices.size(); ++v)
+      on_plane[v] = vertices[v].facet >= 0 && !vertices[v].clamped && !kept.frozen(vertices[v].p);
     PlanarCoarsening coarsening(f, vertices, on_plane, tris);
     r.collapses = coarsening.run();
     coarsening.result(vertices, tris);
@@ -1429,7 +1985,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     for (std::size_t v = 0; v < vertices.size(); ++v) facet_at.emplace(out.points[v], vertices[v].facet);
     auto facet = mesh.add_property_map<vertex_descriptor, std::int64_t>("v:rebuild_facet", -1).first;
     for (vertex_descriptor v : mesh.vertices()) facet[v] = facet_at.at(nearest_point3d(mesh.point(v)));
-    BoundedDecimation decimation(mesh, out, options.decimate_tolerance * r.cell, r.cell);
+    BoundedDecimation decimation(mesh, extracted, options.decimate_tolerance * r.cell, r.cell, kept);
     if (options.sharpen)
       r.sharpened =
           decimation.sharpen(f, input_surface, facet, 0.75 * r.cell, std::cos(options.feature_angle * M_PI / 180));

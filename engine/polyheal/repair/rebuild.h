@@ -43,7 +43,11 @@
 // shell one cell thick on each side (`sheets`), so that no part of the input
 // is dropped; with sheets off they are left out and reported lost (§3.2.7: a
 // soup that encloses nothing then has no volume, and nothing is invented).
-// An input that is already certified clean comes out unchanged.
+// Clean regions keep their facets exactly (beyond §5): facets far from every
+// defect form patches zipped to the grid surface, each patch given up when
+// the exact oracle finds the joined surface wanting (rebuild.cpp,
+// keep_clean_regions). An input that is already certified clean comes out
+// unchanged.
 #pragma once
 
 #include <cstddef>
@@ -60,6 +64,7 @@ struct RebuildOptions {
   double cell_ratio = -1;      // cell size as a fraction of the bbox diagonal; <= 0: the default rule
   double feature_angle = 30;   // degrees: grouping output faces when the input has no groups
   bool keep_clean = true;      // a certified clean input is returned unchanged
+  bool keep_regions = true;    // keep input facets far from every defect, zipped to the grid surface
   bool sheets = true;          // wrap facets that bound no volume in a shell (false: leave them out, reported lost)
   double sheet_shell = 1.0;    // the shell's half-thickness, in cells
   bool simplify = true;        // collapse vertices inside planar regions (exact, surface unchanged)
@@ -111,6 +116,9 @@ struct RebuildReport {
   bool unchanged = false;               // input was already clean
   bool volume = false;                  // some corner is inside
   std::size_t extracted_faces = 0;      // before simplification
+  std::size_t kept_faces = 0;           // input facets kept as they are (clean regions)
+  std::size_t kept_patches = 0;         // ... in this many patches, zipped to the grid surface
+  std::size_t patches_given_up = 0;     // clean patches the zipper could not join (grid surface there)
   std::size_t collapses = 0;            // planar vertices removed
   std::size_t decimated = 0;            // vertices removed by decimation
   std::size_t sharpened = 0;            // vertices moved onto sharp edges and corners
