@@ -637,8 +637,10 @@ namespace {
 // holes touch (the smaller goes), a strip triangle would be degenerate, a
 // kept point coincides with a grid vertex, the joined surface is not a
 // closed 2-manifold at some vertex, or — decided exactly by the oracle on the
-// joined surface — a kept or strip face intersects anything. Kept vertices
-// are frozen in coarsening, sharpening and decimation.
+// joined surface — a kept or strip face intersects anything; in that last
+// case the patch first shrinks where it failed (the kept facets around the
+// offending corners are let go) and is zipped again, up to eight times.
+// Kept vertices are frozen in coarsening, sharpening and decimation.
 
 struct KeptRegions {
   std::size_t faces = 0, patches = 0, given_up = 0;
@@ -761,76 +763,12 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
     for (std::size_t t = 0; t < T; ++t)
       if (near[t]) ok[t] = 0;
   }
-  // A vertex where kept facets meet in more than one fan would pinch the
-  // joined surface: the kept facets around it are let go, until none is left.
-  for (bool again = true; again;) {
-    again = false;
-    std::vector<int> starts(f.points.size(), 0);
-    for (std::size_t t = 0; t < T; ++t)
-      if (ok[t])
-        for (int k = 0; k < 3; ++k)
-          if (!ok[across(std::uint32_t(t), f.tris[t][k], f.tris[t][(k + 1) % 3])]) ++starts[f.tris[t][k]];
-    for (std::size_t v = 0; v < f.points.size(); ++v)
-      if (starts[v] > 1)
-        for (std::uint32_t t : star[v]) {
-          again = again || ok[t];
-          ok[t] = 0;
-        }
-  }
-  // Patches: kept facets joined across their edges.
-  UnionFind join(T);
-  for (std::size_t t = 0; t < T; ++t)
-    if (ok[t])
-      for (int k = 0; k < 3; ++k) {
-        const std::uint32_t o = across(std::uint32_t(t), f.tris[t][k], f.tris[t][(k + 1) % 3]);
-        if (ok[o]) join.unite(t, o);
-      }
-  std::vector<std::int64_t> patch(T, -1);
-  std::unordered_map<std::size_t, std::int64_t> patch_of_root;
-  std::vector<std::uint32_t> kept_tris;  // indices into f.tris
-  for (std::size_t t = 0; t < T; ++t)
-    if (ok[t]) {
-      patch[t] = patch_of_root.emplace(join.find(t), std::int64_t(patch_of_root.size())).first->second;
-      kept_tris.push_back(static_cast<std::uint32_t>(t));
-    }
-  const std::size_t P = patch_of_root.size();
-  if (P == 0) return kept;
-  // Grid vertices a patch covers: within a cell of it, facing the same way.
+  // The grid surface: vertex normals, halfedges, points, stars.
   std::vector<Point3d> vnormal(vertices.size(), Point3d{0, 0, 0});
   for (const Tri& t : tris) {
     const Point3d n = normal(vertices[t[0]].p, vertices[t[1]].p, vertices[t[2]].p);
     for (Index v : t)
       for (int k = 0; k < 3; ++k) vnormal[v][k] += n[k];
-  }
-  std::vector<std::array<Point3d, 3>> kept_corners;
-  for (std::uint32_t t : kept_tris) kept_corners.push_back({f.points[f.tris[t][0]], f.points[f.tris[t][1]], f.points[f.tris[t][2]]});
-  const detail::SurfaceDistance to_kept(kept_corners);
-  std::vector<std::int64_t> covered(vertices.size(), -1);
-  tbb::parallel_for(std::size_t(0), vertices.size(), [&](std::size_t v) {
-    const auto [d2, i] = to_kept.nearest(vertices[v].p);
-    if (d2 > 0.25 * h * h) return;  // half a cell
-    const Tri& tr = f.tris[kept_tris[i]];
-    const Point3d n = normal(f.points[tr[0]], f.points[tr[1]], f.points[tr[2]]);
-    if (dot(n, vnormal[v]) > 0.5 * std::sqrt(dot(n, n) * dot(vnormal[v], vnormal[v]))) covered[v] = patch[kept_tris[i]];
-  });
-  // Each patch's boundary loops (kept facets on the left), once.
-  std::vector<std::vector<std::array<Index, 2>>> patch_edges(P);
-  for (std::uint32_t t : kept_tris)
-    for (int k = 0; k < 3; ++k) {
-      const Index a = f.tris[t][k], b = f.tris[t][(k + 1) % 3];
-      if (patch[across(t, a, b)] != patch[t]) patch_edges[std::size_t(patch[t])].push_back({a, b});
-    }
-  std::vector<char> give_up(P, 0);
-  std::vector<std::vector<std::vector<Index>>> patch_loops(P);
-  for (std::size_t p = 0; p < P; ++p)
-    if (!trace_loops(patch_edges[p], patch_loops[p])) give_up[p] = 1;
-  {  // a kept point on two patches (they touch at a corner) would pinch: give up both
-    std::unordered_map<Index, std::size_t> owner;
-    for (std::uint32_t t : kept_tris)
-      for (Index v : f.tris[t]) {
-        const auto [it, added] = owner.emplace(v, std::size_t(patch[t]));
-        if (!added && it->second != std::size_t(patch[t])) give_up[it->second] = give_up[std::size_t(patch[t])] = 1;
-      }
   }
   std::unordered_map<std::uint64_t, std::uint32_t> grid_halfedge;  // a -> b: its grid triangle
   for (std::size_t t = 0; t < tris.size(); ++t)
@@ -842,319 +780,414 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
   std::vector<std::vector<std::uint32_t>> grid_star(vertices.size());
   for (std::size_t t = 0; t < tris.size(); ++t)
     for (Index v : tris[t]) grid_star[v].push_back(static_cast<std::uint32_t>(t));
-  std::vector<std::size_t> size(P, 0);  // kept facets per patch
-  for (std::uint32_t t : kept_tris) ++size[std::size_t(patch[t])];
-  std::vector<OutVertex> out_vertices;
-  std::vector<Tri> out_tris;
-  for (int round = 0; round < 12; ++round) {
-    std::vector<char> fails = give_up;
-    // Grid faces taken out, by patch.
-    std::vector<std::int64_t> removed(tris.size(), -1);
-    for (std::size_t t = 0; t < tris.size(); ++t)
-      for (Index v : tris[t]) {
-        const std::int64_t p = covered[v];
-        if (p < 0 || give_up[std::size_t(p)]) continue;
-        if (removed[t] >= 0 && removed[t] != p) {  // two patches within reach: the smaller goes
-          fails[std::size_t(size[std::size_t(p)] < size[std::size_t(removed[t])] ? p : removed[t])] = 1;
-        }
-        if (removed[t] < 0 || size[std::size_t(p)] > size[std::size_t(removed[t])]) removed[t] = p;
-      }
-    // Where the hole's boundary passes a grid vertex twice (a neck), the
-    // faces around that vertex go too.
-    for (int pass = 0; pass < 16; ++pass) {
-      std::vector<int> starts(vertices.size(), 0);
-      for (std::size_t t = 0; t < tris.size(); ++t) {
-        if (removed[t] >= 0) continue;
-        for (int k = 0; k < 3; ++k)
-          if (removed[grid_halfedge.at(edge_key(tris[t][(k + 1) % 3], tris[t][k]))] >= 0) ++starts[tris[t][k]];
-      }
-      bool widened = false;
-      // A grid face with two edges on the hole juts into it: it would hide
-      // parts of the hole's loop from the patch's, and the strip between
-      // them would fold over it.
-      for (std::size_t t = 0; t < tris.size(); ++t) {
-        if (removed[t] >= 0) continue;
-        int open = 0;
-        std::int64_t p = -1;
-        for (int k = 0; k < 3; ++k) {
-          const std::int64_t q = removed[grid_halfedge.at(edge_key(tris[t][(k + 1) % 3], tris[t][k]))];
-          if (q >= 0) {
-            ++open;
-            p = q;
+  // Where a kept facet or a strip intersects something, the patch shrinks
+  // there (the kept facets around the offending corners are let go) and is
+  // joined again; after kShrinks attempts such a patch is given up whole.
+  constexpr int kShrinks = 8;
+  for (int attempt = 0;; ++attempt) {
+    // A vertex where kept facets meet in more than one fan would pinch the
+    // joined surface: the kept facets around it are let go, until none is left.
+    for (bool again = true; again;) {
+      again = false;
+      std::vector<int> starts(f.points.size(), 0);
+      for (std::size_t t = 0; t < T; ++t)
+        if (ok[t])
+          for (int k = 0; k < 3; ++k)
+            if (!ok[across(std::uint32_t(t), f.tris[t][k], f.tris[t][(k + 1) % 3])]) ++starts[f.tris[t][k]];
+      for (std::size_t v = 0; v < f.points.size(); ++v)
+        if (starts[v] > 1)
+          for (std::uint32_t t : star[v]) {
+            again = again || ok[t];
+            ok[t] = 0;
           }
+    }
+    // Patches: kept facets joined across their edges.
+    UnionFind join(T);
+    for (std::size_t t = 0; t < T; ++t)
+      if (ok[t])
+        for (int k = 0; k < 3; ++k) {
+          const std::uint32_t o = across(std::uint32_t(t), f.tris[t][k], f.tris[t][(k + 1) % 3]);
+          if (ok[o]) join.unite(t, o);
         }
-        if (open >= 2) {
-          removed[t] = p;
-          widened = true;
-        }
+    std::vector<std::int64_t> patch(T, -1);
+    std::unordered_map<std::size_t, std::int64_t> patch_of_root;
+    std::vector<std::uint32_t> kept_tris;  // indices into f.tris
+    for (std::size_t t = 0; t < T; ++t)
+      if (ok[t]) {
+        patch[t] = patch_of_root.emplace(join.find(t), std::int64_t(patch_of_root.size())).first->second;
+        kept_tris.push_back(static_cast<std::uint32_t>(t));
       }
-      for (std::size_t v = 0; v < vertices.size(); ++v) {
-        if (starts[v] < 2) continue;
-        std::int64_t p = -1;
-        for (std::uint32_t t : grid_star[v]) p = std::max(p, removed[t]);
-        for (std::uint32_t t : grid_star[v])
-          if (removed[t] < 0) {
+    const std::size_t P = patch_of_root.size();
+    if (P == 0) return kept;
+    // Grid vertices a patch covers: within half a cell of it, facing the same way.
+    std::vector<std::array<Point3d, 3>> kept_corners;
+    for (std::uint32_t t : kept_tris)
+      kept_corners.push_back({f.points[f.tris[t][0]], f.points[f.tris[t][1]], f.points[f.tris[t][2]]});
+    const detail::SurfaceDistance to_kept(kept_corners);
+    std::vector<std::int64_t> covered(vertices.size(), -1);
+    tbb::parallel_for(std::size_t(0), vertices.size(), [&](std::size_t v) {
+      const auto [d2, i] = to_kept.nearest(vertices[v].p);
+      if (d2 > 0.25 * h * h) return;  // half a cell
+      const Tri& tr = f.tris[kept_tris[i]];
+      const Point3d n = normal(f.points[tr[0]], f.points[tr[1]], f.points[tr[2]]);
+      if (dot(n, vnormal[v]) > 0.5 * std::sqrt(dot(n, n) * dot(vnormal[v], vnormal[v])))
+        covered[v] = patch[kept_tris[i]];
+    });
+    // Each patch's boundary loops (kept facets on the left), once.
+    std::vector<std::vector<std::array<Index, 2>>> patch_edges(P);
+    for (std::uint32_t t : kept_tris)
+      for (int k = 0; k < 3; ++k) {
+        const Index a = f.tris[t][k], b = f.tris[t][(k + 1) % 3];
+        if (patch[across(t, a, b)] != patch[t]) patch_edges[std::size_t(patch[t])].push_back({a, b});
+      }
+    std::vector<char> give_up(P, 0);
+    std::vector<std::vector<std::vector<Index>>> patch_loops(P);
+    for (std::size_t p = 0; p < P; ++p)
+      if (!trace_loops(patch_edges[p], patch_loops[p])) give_up[p] = 1;
+    {  // a kept point on two patches (they touch at a corner) would pinch: give up both
+      std::unordered_map<Index, std::size_t> owner;
+      for (std::uint32_t t : kept_tris)
+        for (Index v : f.tris[t]) {
+          const auto [it, added] = owner.emplace(v, std::size_t(patch[t]));
+          if (!added && it->second != std::size_t(patch[t])) give_up[it->second] = give_up[std::size_t(patch[t])] = 1;
+        }
+    }
+    std::vector<std::size_t> size(P, 0);  // kept facets per patch
+    for (std::uint32_t t : kept_tris) ++size[std::size_t(patch[t])];
+    std::vector<OutVertex> out_vertices;
+    std::vector<Tri> out_tris;
+    std::vector<Index> out_source;  // per output vertex: its point of f (kNoIndex: a grid vertex)
+    std::vector<char> drop(T, 0);   // kept facets to let go before the next attempt
+    bool shrink = false;
+    for (int round = 0; round < 12 && !shrink; ++round) {
+      std::vector<char> fails = give_up;
+      // Grid faces taken out, by patch.
+      std::vector<std::int64_t> removed(tris.size(), -1);
+      for (std::size_t t = 0; t < tris.size(); ++t)
+        for (Index v : tris[t]) {
+          const std::int64_t p = covered[v];
+          if (p < 0 || give_up[std::size_t(p)]) continue;
+          if (removed[t] >= 0 && removed[t] != p) {  // two patches within reach: the smaller goes
+            fails[std::size_t(size[std::size_t(p)] < size[std::size_t(removed[t])] ? p : removed[t])] = 1;
+          }
+          if (removed[t] < 0 || size[std::size_t(p)] > size[std::size_t(removed[t])]) removed[t] = p;
+        }
+      // Where the hole's boundary passes a grid vertex twice (a neck), the
+      // faces around that vertex go too.
+      for (int pass = 0; pass < 16; ++pass) {
+        std::vector<int> starts(vertices.size(), 0);
+        for (std::size_t t = 0; t < tris.size(); ++t) {
+          if (removed[t] >= 0) continue;
+          for (int k = 0; k < 3; ++k)
+            if (removed[grid_halfedge.at(edge_key(tris[t][(k + 1) % 3], tris[t][k]))] >= 0) ++starts[tris[t][k]];
+        }
+        bool widened = false;
+        // A grid face with two edges on the hole juts into it: it would hide
+        // parts of the hole's loop from the patch's, and the strip between
+        // them would fold over it.
+        for (std::size_t t = 0; t < tris.size(); ++t) {
+          if (removed[t] >= 0) continue;
+          int open = 0;
+          std::int64_t p = -1;
+          for (int k = 0; k < 3; ++k) {
+            const std::int64_t q = removed[grid_halfedge.at(edge_key(tris[t][(k + 1) % 3], tris[t][k]))];
+            if (q >= 0) {
+              ++open;
+              p = q;
+            }
+          }
+          if (open >= 2) {
             removed[t] = p;
             widened = true;
-          } else if (removed[t] != p) {
-            fails[std::size_t(removed[t])] = fails[std::size_t(p)] = 1;
+          }
+        }
+        for (std::size_t v = 0; v < vertices.size(); ++v) {
+          if (starts[v] < 2) continue;
+          std::int64_t p = -1;
+          for (std::uint32_t t : grid_star[v]) p = std::max(p, removed[t]);
+          for (std::uint32_t t : grid_star[v])
+            if (removed[t] < 0) {
+              removed[t] = p;
+              widened = true;
+            } else if (removed[t] != p) {
+              fails[std::size_t(removed[t])] = fails[std::size_t(p)] = 1;
+            }
+        }
+        if (!widened) break;
+      }
+      // Two patches' holes may not touch (their loops would run into each
+      // other): the smaller patch goes.
+      for (std::size_t t = 0; t < tris.size(); ++t) {
+        if (removed[t] < 0) continue;
+        for (int k = 0; k < 3; ++k)
+          for (std::uint32_t u : grid_star[tris[t][k]]) {
+            const std::int64_t p = removed[t], q = removed[u];
+            if (q >= 0 && q != p) fails[std::size_t(size[std::size_t(p)] < size[std::size_t(q)] ? p : q)] = 1;
           }
       }
-      if (!widened) break;
-    }
-    // Two patches' holes may not touch (their loops would run into each
-    // other): the smaller patch goes.
-    for (std::size_t t = 0; t < tris.size(); ++t) {
-      if (removed[t] < 0) continue;
-      for (int k = 0; k < 3; ++k)
-        for (std::uint32_t u : grid_star[tris[t][k]]) {
-          const std::int64_t p = removed[t], q = removed[u];
-          if (q >= 0 && q != p) fails[std::size_t(size[std::size_t(p)] < size[std::size_t(q)] ? p : q)] = 1;
+      {  // patches in conflict go first; the others are judged without them
+        bool dropped = false;
+        for (std::size_t p = 0; p < P; ++p)
+          if (fails[p] && !give_up[p]) {
+            give_up[p] = 1;
+            dropped = true;
+          }
+        if (dropped) continue;
+      }
+      // The holes' loops (grid faces on the left), by patch.
+      std::vector<std::vector<std::array<Index, 2>>> hole_edges(P);
+      std::vector<std::array<Index, 2>> all_hole_edges;
+      for (std::size_t t = 0; t < tris.size(); ++t) {
+        if (removed[t] >= 0) continue;
+        for (int k = 0; k < 3; ++k) {
+          const Index a = tris[t][k], b = tris[t][(k + 1) % 3];
+          const std::int64_t p = removed[grid_halfedge.at(edge_key(b, a))];
+          if (p < 0) continue;
+          hole_edges[std::size_t(p)].push_back({a, b});
+          all_hole_edges.push_back({a, b});
         }
-    }
-    {  // patches in conflict go first; the others are judged without them
-      bool dropped = false;
+      }
+      {  // a grid vertex on two holes' loops
+        std::unordered_map<Index, int> starts;
+        for (const auto& e : all_hole_edges) ++starts[e[0]];
+        for (std::size_t p = 0; p < P; ++p)
+          for (const auto& e : hole_edges[p])
+            if (starts[e[0]] > 1) fails[p] = 1;
+      }
+      // Zip every patch that is still in.
+      out_vertices.clear();
+      out_tris.clear();
+      std::vector<std::int64_t> out_patch;  // per output triangle: its patch (-1: a grid face)
+      std::vector<Index> id(f.points.size(), kNoIndex);
+      std::vector<Index> grid_id(vertices.size(), kNoIndex);
+      out_source.clear();
+      auto grid_vertex = [&](Index v) {
+        if (grid_id[v] == kNoIndex) {
+          grid_id[v] = static_cast<Index>(out_vertices.size());
+          out_vertices.push_back(vertices[v]);
+          out_source.push_back(kNoIndex);
+        }
+        return grid_id[v];
+      };
+      auto kept_vertex = [&](Index v, std::uint32_t t) {
+        if (id[v] == kNoIndex) {
+          id[v] = static_cast<Index>(out_vertices.size());
+          out_vertices.push_back({f.points[v], std::int64_t(t)});
+          out_source.push_back(v);
+        }
+        return id[v];
+      };
+      std::vector<std::vector<std::array<std::int64_t, 3>>> strip_refs(P);  // >= 0: f point; < 0: -(grid vertex)-1
+      for (std::size_t p = 0; p < P; ++p) {
+        if (fails[p]) continue;
+        std::vector<std::vector<Index>> holes;
+        if (!trace_loops(hole_edges[p], holes) || holes.size() != patch_loops[p].size()) {
+          fails[p] = 1;
+          continue;
+        }
+        for (const auto& loop : patch_loops[p])
+          for (Index v : loop)
+            if (std::binary_search(grid_points.begin(), grid_points.end(), f.points[v])) fails[p] = 1;
+        if (fails[p]) continue;
+        // Pair each loop of the patch with the nearest hole (mean distance of
+        // up to 16 of its points to the hole's points); one to one.
+        std::vector<std::size_t> pair(holes.size());
+        std::vector<char> taken(holes.size(), 0);
+        for (std::size_t i = 0; i < patch_loops[p].size() && !fails[p]; ++i) {
+          const auto& A = patch_loops[p][i];
+          double best = HUGE_VAL;
+          std::size_t at = 0;
+          for (std::size_t j = 0; j < holes.size(); ++j) {
+            double sum = 0;
+            const std::size_t step = std::max<std::size_t>(1, A.size() / 16);
+            for (std::size_t s = 0; s < A.size(); s += step) {
+              double d = HUGE_VAL;
+              for (Index b : holes[j]) d = std::min(d, dist(f.points[A[s]], vertices[b].p));
+              sum += d;
+            }
+            if (sum < best) {
+              best = sum;
+              at = j;
+            }
+          }
+          if (taken[at]) fails[p] = 1;
+          taken[at] = 1;
+          pair[i] = at;
+        }
+        if (fails[p]) continue;
+        // Zip: A runs with the patch on its left, B with the grid on its left,
+        // so they run opposite ways along the strip: advance i on A, j back on B.
+        for (std::size_t i = 0; i < patch_loops[p].size() && !fails[p]; ++i) {
+          const auto& A = patch_loops[p][i];
+          const auto& B = holes[pair[i]];
+          const std::size_t k = A.size(), l = B.size();
+          std::size_t j0 = 0;
+          for (std::size_t j = 1; j < l; ++j)
+            if (dist(f.points[A[0]], vertices[B[j]].p) < dist(f.points[A[0]], vertices[B[j0]].p)) j0 = j;
+          std::size_t ia = 0, jb = 0;
+          auto a_at = [&](std::size_t s) { return A[s % k]; };
+          auto b_at = [&](std::size_t s) { return B[(j0 + l - s % l) % l]; };  // s steps back from j0
+          while (ia < k || jb < l) {
+            const Index a0 = a_at(ia), a1 = a_at(ia + 1), b0 = b_at(jb), b1 = b_at(jb + 1);
+            const bool can_a = ia < k, can_b = jb < l;
+            const bool flat_a =
+                can_a && CGAL::collinear(ipoint(f.points[a1]), ipoint(f.points[a0]), ipoint(vertices[b0].p));
+            const bool flat_b =
+                can_b && CGAL::collinear(ipoint(vertices[b0].p), ipoint(vertices[b1].p), ipoint(f.points[a0]));
+            bool take_a;
+            if (can_a && can_b && !flat_a && !flat_b)
+              take_a = dist(f.points[a1], vertices[b0].p) <= dist(f.points[a0], vertices[b1].p);
+            else if (can_a && !flat_a) take_a = true;
+            else if (can_b && !flat_b) take_a = false;
+            else {
+              fails[p] = 1;
+              break;
+            }
+            if (take_a) {
+              strip_refs[p].push_back({std::int64_t(a1), std::int64_t(a0), -std::int64_t(b0) - 1});
+              ++ia;
+            } else {
+              strip_refs[p].push_back({-std::int64_t(b0) - 1, -std::int64_t(b1) - 1, std::int64_t(a0)});
+              ++jb;
+            }
+          }
+        }
+      }
+      // The joined surface: grid faces not taken out by a zipped patch, the
+      // zipped patches' facets and strips.
+      auto in = [&](std::int64_t p) { return p >= 0 && !fails[std::size_t(p)]; };
+      for (std::size_t t = 0; t < tris.size(); ++t)
+        if (!in(removed[t])) {
+          out_tris.push_back({grid_vertex(tris[t][0]), grid_vertex(tris[t][1]), grid_vertex(tris[t][2])});
+          out_patch.push_back(-1);
+        }
+      for (std::uint32_t t : kept_tris) {
+        const std::int64_t p = patch[t];
+        if (!in(p)) continue;
+        out_tris.push_back({kept_vertex(f.tris[t][0], t), kept_vertex(f.tris[t][1], t), kept_vertex(f.tris[t][2], t)});
+        out_patch.push_back(p);
+      }
+      for (std::size_t p = 0; p < P; ++p) {
+        if (!in(std::int64_t(p))) continue;
+        for (const auto& s : strip_refs[p]) {
+          Tri t;
+          for (int k = 0; k < 3; ++k) t[k] = s[k] >= 0 ? id[std::size_t(s[k])] : grid_vertex(Index(-s[k] - 1));
+          out_tris.push_back(t);
+          out_patch.push_back(std::int64_t(p));
+        }
+      }
+      // The joined surface must be a closed 2-manifold: every edge once in
+      // each direction, every vertex one fan. A patch with a face at a vertex
+      // where that fails is given up (and with none there, every patch).
+      {
+        std::unordered_map<std::uint64_t, int> directed;
+        std::vector<std::vector<std::uint32_t>> around(out_vertices.size());
+        for (std::size_t t = 0; t < out_tris.size(); ++t)
+          for (int k = 0; k < 3; ++k) {
+            ++directed[edge_key(out_tris[t][k], out_tris[t][(k + 1) % 3])];
+            around[out_tris[t][k]].push_back(static_cast<std::uint32_t>(t));
+          }
+        auto fine = [&](Index v) {
+          if (around[v].empty()) return true;
+          for (std::uint32_t t : around[v]) {
+            int k = 0;
+            while (out_tris[t][k] != v) ++k;
+            const Index b = out_tris[t][(k + 1) % 3];
+            const auto ab = directed.find(edge_key(v, b)), ba = directed.find(edge_key(b, v));
+            if (ab->second != 1 || ba == directed.end() || ba->second != 1) return false;
+          }
+          // one fan: from a face, cross the edge (prev, v) into the face that
+          // has v -> prev, until back
+          std::unordered_map<Index, std::uint32_t> by_next;  // v -> b: the face
+          for (std::uint32_t t : around[v]) {
+            int k = 0;
+            while (out_tris[t][k] != v) ++k;
+            by_next.emplace(out_tris[t][(k + 1) % 3], t);
+          }
+          std::uint32_t t = around[v][0];
+          std::size_t steps = 0;
+          do {
+            int k = 0;
+            while (out_tris[t][k] != v) ++k;
+            const auto it = by_next.find(out_tris[t][(k + 2) % 3]);
+            if (it == by_next.end()) return false;
+            t = it->second;
+            ++steps;
+          } while (t != around[v][0] && steps <= around[v].size());
+          return steps == around[v].size();
+        };
+        for (Index v = 0; v < out_vertices.size(); ++v) {
+          if (fine(v)) continue;
+          bool blamed = false;
+          for (std::uint32_t t : around[v])
+            if (out_patch[t] >= 0) {
+              fails[std::size_t(out_patch[t])] = 1;
+              blamed = true;
+            }
+          if (!blamed) std::fill(fails.begin(), fails.end(), 1);
+        }
+      }
+      // Exactly: no kept or strip face may intersect anything.
+      Soup joined;
+      for (const OutVertex& v : out_vertices) joined.points.push_back(v.p);
+      for (const Tri& t : out_tris) joined.add_triangle(t[0], t[1], t[2]);
+      std::vector<char> only(out_tris.size(), 0);
+      for (std::size_t t = 0; t < out_tris.size(); ++t) only[t] = out_patch[t] >= 0;
+      SelfIntersectionOptions so;
+      so.only = &only;
+      bool clean = true;
+      for (std::size_t p = 0; p < P; ++p) clean = clean && !(fails[p] && !give_up[p]);
+      if (clean) {  // (otherwise the next round builds the surface again)
+        for (const FacePair& q : find_self_intersections(joined, so))
+          for (std::size_t t : {q.first, q.second}) {
+            if (out_patch[t] < 0) continue;
+            clean = false;
+            if (attempt >= kShrinks) {
+              fails[std::size_t(out_patch[t])] = 1;
+              continue;
+            }
+            shrink = true;
+            for (Index v : out_tris[t])
+              if (out_source[v] != kNoIndex)
+                for (std::uint32_t u : star[out_source[v]]) drop[u] = 1;
+          }
+        if (shrink) break;
+      }
+      bool changed = false;
       for (std::size_t p = 0; p < P; ++p)
         if (fails[p] && !give_up[p]) {
           give_up[p] = 1;
-          dropped = true;
+          changed = true;
         }
-      if (dropped) continue;
-    }
-    // The holes' loops (grid faces on the left), by patch.
-    std::vector<std::vector<std::array<Index, 2>>> hole_edges(P);
-    std::vector<std::array<Index, 2>> all_hole_edges;
-    for (std::size_t t = 0; t < tris.size(); ++t) {
-      if (removed[t] >= 0) continue;
-      for (int k = 0; k < 3; ++k) {
-        const Index a = tris[t][k], b = tris[t][(k + 1) % 3];
-        const std::int64_t p = removed[grid_halfedge.at(edge_key(b, a))];
-        if (p < 0) continue;
-        hole_edges[std::size_t(p)].push_back({a, b});
-        all_hole_edges.push_back({a, b});
+      if (clean && !changed) break;
+      if (round == 11) {  // still failing: give up every patch
+        std::fill(give_up.begin(), give_up.end(), 1);
+        KeptRegions none;
+        none.given_up = P;
+        return none;
       }
     }
-    {  // a grid vertex on two holes' loops
-      std::unordered_map<Index, int> starts;
-      for (const auto& e : all_hole_edges) ++starts[e[0]];
-      for (std::size_t p = 0; p < P; ++p)
-        for (const auto& e : hole_edges[p])
-          if (starts[e[0]] > 1) fails[p] = 1;
-    }
-    // Zip every patch that is still in.
-    out_vertices.clear();
-    out_tris.clear();
-    std::vector<std::int64_t> out_patch;  // per output triangle: its patch (-1: a grid face)
-    std::vector<Index> id(f.points.size(), kNoIndex);
-    std::vector<Index> grid_id(vertices.size(), kNoIndex);
-    auto grid_vertex = [&](Index v) {
-      if (grid_id[v] == kNoIndex) {
-        grid_id[v] = static_cast<Index>(out_vertices.size());
-        out_vertices.push_back(vertices[v]);
-      }
-      return grid_id[v];
-    };
-    auto kept_vertex = [&](Index v, std::uint32_t t) {
-      if (id[v] == kNoIndex) {
-        id[v] = static_cast<Index>(out_vertices.size());
-        out_vertices.push_back({f.points[v], std::int64_t(t)});
-      }
-      return id[v];
-    };
-    std::vector<std::vector<std::array<std::int64_t, 3>>> strip_refs(P);  // >= 0: f point; < 0: -(grid vertex)-1
-    for (std::size_t p = 0; p < P; ++p) {
-      if (fails[p]) continue;
-      std::vector<std::vector<Index>> holes;
-      if (!trace_loops(hole_edges[p], holes) || holes.size() != patch_loops[p].size()) {
-        fails[p] = 1;
-        continue;
-      }
-      for (const auto& loop : patch_loops[p])
-        for (Index v : loop)
-          if (std::binary_search(grid_points.begin(), grid_points.end(), f.points[v])) fails[p] = 1;
-      if (fails[p]) continue;
-      // Pair each loop of the patch with the nearest hole (mean distance of
-      // up to 16 of its points to the hole's points); one to one.
-      std::vector<std::size_t> pair(holes.size());
-      std::vector<char> taken(holes.size(), 0);
-      for (std::size_t i = 0; i < patch_loops[p].size() && !fails[p]; ++i) {
-        const auto& A = patch_loops[p][i];
-        double best = HUGE_VAL;
-        std::size_t at = 0;
-        for (std::size_t j = 0; j < holes.size(); ++j) {
-          double sum = 0;
-          const std::size_t step = std::max<std::size_t>(1, A.size() / 16);
-          for (std::size_t s = 0; s < A.size(); s += step) {
-            double d = HUGE_VAL;
-            for (Index b : holes[j]) d = std::min(d, dist(f.points[A[s]], vertices[b].p));
-            sum += d;
-          }
-          if (sum < best) {
-            best = sum;
-            at = j;
-          }
-        }
-        if (taken[at]) fails[p] = 1;
-        taken[at] = 1;
-        pair[i] = at;
-      }
-      if (fails[p]) continue;
-      // Zip: A runs with the patch on its left, B with the grid on its left,
-      // so they run opposite ways along the strip: advance i on A, j back on B.
-      for (std::size_t i = 0; i < patch_loops[p].size() && !fails[p]; ++i) {
-        const auto& A = patch_loops[p][i];
-        const auto& B = holes[pair[i]];
-        const std::size_t k = A.size(), l = B.size();
-        std::size_t j0 = 0;
-        for (std::size_t j = 1; j < l; ++j)
-          if (dist(f.points[A[0]], vertices[B[j]].p) < dist(f.points[A[0]], vertices[B[j0]].p)) j0 = j;
-        std::size_t ia = 0, jb = 0;
-        auto a_at = [&](std::size_t s) { return A[s % k]; };
-        auto b_at = [&](std::size_t s) { return B[(j0 + l - s % l) % l]; };  // s steps back from j0
-        while (ia < k || jb < l) {
-          const Index a0 = a_at(ia), a1 = a_at(ia + 1), b0 = b_at(jb), b1 = b_at(jb + 1);
-          const bool can_a = ia < k, can_b = jb < l;
-          const bool flat_a = can_a && CGAL::collinear(ipoint(f.points[a1]), ipoint(f.points[a0]), ipoint(vertices[b0].p));
-          const bool flat_b = can_b && CGAL::collinear(ipoint(vertices[b0].p), ipoint(vertices[b1].p), ipoint(f.points[a0]));
-          bool take_a;
-          if (can_a && can_b && !flat_a && !flat_b)
-            take_a = dist(f.points[a1], vertices[b0].p) <= dist(f.points[a0], vertices[b1].p);
-          else if (can_a && !flat_a) take_a = true;
-          else if (can_b && !flat_b) take_a = false;
-          else {
-            fails[p] = 1;
-            break;
-          }
-          if (take_a) {
-            strip_refs[p].push_back({std::int64_t(a1), std::int64_t(a0), -std::int64_t(b0) - 1});
-            ++ia;
-          } else {
-            strip_refs[p].push_back({-std::int64_t(b0) - 1, -std::int64_t(b1) - 1, std::int64_t(a0)});
-            ++jb;
-          }
-        }
-      }
-    }
-    // The joined surface: grid faces not taken out by a zipped patch, the
-    // zipped patches' facets and strips.
-    auto in = [&](std::int64_t p) { return p >= 0 && !fails[std::size_t(p)]; };
-    for (std::size_t t = 0; t < tris.size(); ++t)
-      if (!in(removed[t])) {
-        out_tris.push_back({grid_vertex(tris[t][0]), grid_vertex(tris[t][1]), grid_vertex(tris[t][2])});
-        out_patch.push_back(-1);
-      }
-    for (std::uint32_t t : kept_tris) {
-      const std::int64_t p = patch[t];
-      if (!in(p)) continue;
-      out_tris.push_back({kept_vertex(f.tris[t][0], t), kept_vertex(f.tris[t][1], t), kept_vertex(f.tris[t][2], t)});
-      out_patch.push_back(p);
+    if (shrink) {
+      for (std::uint32_t t : kept_tris)
+        if (give_up[std::size_t(patch[t])] || drop[t]) ok[t] = 0;
+      for (std::size_t p = 0; p < P; ++p) kept.given_up += give_up[p];
+      continue;
     }
     for (std::size_t p = 0; p < P; ++p) {
-      if (!in(std::int64_t(p))) continue;
-      for (const auto& s : strip_refs[p]) {
-        Tri t;
-        for (int k = 0; k < 3; ++k) t[k] = s[k] >= 0 ? id[std::size_t(s[k])] : grid_vertex(Index(-s[k] - 1));
-        out_tris.push_back(t);
-        out_patch.push_back(std::int64_t(p));
+      if (give_up[p]) ++kept.given_up;
+      else ++kept.patches;
+    }
+    for (std::uint32_t t : kept_tris)
+      if (!give_up[std::size_t(patch[t])]) {
+        ++kept.faces;
+        for (Index v : f.tris[t]) kept.points.push_back(f.points[v]);
       }
-    }
-    // The joined surface must be a closed 2-manifold: every edge once in
-    // each direction, every vertex one fan. A patch with a face at a vertex
-    // where that fails is given up (and with none there, every patch).
-    {
-      std::unordered_map<std::uint64_t, int> directed;
-      std::vector<std::vector<std::uint32_t>> around(out_vertices.size());
-      for (std::size_t t = 0; t < out_tris.size(); ++t)
-        for (int k = 0; k < 3; ++k) {
-          ++directed[edge_key(out_tris[t][k], out_tris[t][(k + 1) % 3])];
-          around[out_tris[t][k]].push_back(static_cast<std::uint32_t>(t));
-        }
-      auto fine = [&](Index v) {
-        if (around[v].empty()) return true;
-        for (std::uint32_t t : around[v]) {
-          int k = 0;
-          while (out_tris[t][k] != v) ++k;
-          const Index b = out_tris[t][(k + 1) % 3];
-          const auto ab = directed.find(edge_key(v, b)), ba = directed.find(edge_key(b, v));
-          if (ab->second != 1 || ba == directed.end() || ba->second != 1) return false;
-        }
-        // one fan: from a face, cross the edge (prev, v) into the face that
-        // has v -> prev, until back
-        std::unordered_map<Index, std::uint32_t> by_next;  // v -> b: the face
-        for (std::uint32_t t : around[v]) {
-          int k = 0;
-          while (out_tris[t][k] != v) ++k;
-          by_next.emplace(out_tris[t][(k + 1) % 3], t);
-        }
-        std::uint32_t t = around[v][0];
-        std::size_t steps = 0;
-        do {
-          int k = 0;
-          while (out_tris[t][k] != v) ++k;
-          const auto it = by_next.find(out_tris[t][(k + 2) % 3]);
-          if (it == by_next.end()) return false;
-          t = it->second;
-          ++steps;
-        } while (t != around[v][0] && steps <= around[v].size());
-        return steps == around[v].size();
-      };
-      for (Index v = 0; v < out_vertices.size(); ++v) {
-        if (fine(v)) continue;
-        bool blamed = false;
-        for (std::uint32_t t : around[v])
-          if (out_patch[t] >= 0) {
-            fails[std::size_t(out_patch[t])] = 1;
-            blamed = true;
-          }
-        if (!blamed) std::fill(fails.begin(), fails.end(), 1);
-      }
-    }
-    // Exactly: no kept or strip face may intersect anything.
-    Soup joined;
-    for (const OutVertex& v : out_vertices) joined.points.push_back(v.p);
-    for (const Tri& t : out_tris) joined.add_triangle(t[0], t[1], t[2]);
-    std::vector<char> only(out_tris.size(), 0);
-    for (std::size_t t = 0; t < out_tris.size(); ++t) only[t] = out_patch[t] >= 0;
-    SelfIntersectionOptions so;
-    so.only = &only;
-    bool clean = true;
-    for (std::size_t p = 0; p < P; ++p) clean = clean && !(fails[p] && !give_up[p]);
-    if (clean) {  // (otherwise the next round builds the surface again)
-      for (const FacePair& q : find_self_intersections(joined, so))
-        for (std::size_t t : {q.first, q.second})
-          if (out_patch[t] >= 0) {
-            fails[std::size_t(out_patch[t])] = 1;
-            clean = false;
-          }
-    }
-    bool changed = false;
-    for (std::size_t p = 0; p < P; ++p)
-      if (fails[p] && !give_up[p]) {
-        give_up[p] = 1;
-        changed = true;
-      }
-    if (clean && !changed) break;
-    if (round == 11) {  // still failing: give up every patch
-      std::fill(give_up.begin(), give_up.end(), 1);
-      KeptRegions none;
-      none.given_up = P;
-      return none;
-    }
+    std::sort(kept.points.begin(), kept.points.end());
+    kept.points.erase(std::unique(kept.points.begin(), kept.points.end()), kept.points.end());
+    vertices = std::move(out_vertices);
+    tris = std::move(out_tris);
+    return kept;
   }
-  for (std::size_t p = 0; p < P; ++p) {
-    if (give_up[p]) ++kept.given_up;
-    else ++kept.patches;
-  }
-  for (std::uint32_t t : kept_tris)
-    if (!give_up[std::size_t(patch[t])]) {
-      ++kept.faces;
-      for (Index v : f.tris[t]) kept.points.push_back(f.points[v]);
-    }
-  std::sort(kept.points.begin(), kept.points.end());
-  kept.points.erase(std::unique(kept.points.begin(), kept.points.end()), kept.points.end());
-  vertices = std::move(out_vertices);
-  tris = std::move(out_tris);
-  return kept;
 }
 
 // ---------------------------------------------------------------------------
