@@ -12,6 +12,7 @@
 #include "polyheal/io/read.h"
 #include "polyheal/io/write.h"
 #include "polyheal/mesh/errors.h"
+#include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/weld.h"
 #include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/rebuild.h"
@@ -254,6 +255,59 @@ TEST_CASE("rebuild: inconsistently oriented patches are reoriented", "[rebuild]"
   RebuildOptions blunt = grid;
   blunt.sharpen = false;
   CHECK(box_corners(rebuild(in, blunt).soup) == 0);  // cube marching alone cuts every corner
+}
+
+TEST_CASE("rebuild: faces far from every defect keep their exact input coordinates", "[rebuild]") {
+  // A torus with a hole (the faces around one vertex left out): the grid
+  // spans the opening; the faces at the opening (a corner on its rim) are
+  // its defect, and every face more than three cells from them (the margin
+  // is two) must come out as it is, zipped to the grid surface. Its
+  // facets are several cells wide, so the strips meet the grid's faces on
+  // the torus's convex folds: those faces go into the hole and the strip is
+  // zipped again.
+  const Soup torus = read_soup(test::fixture("torus.off"));
+  Soup in;
+  in.points = torus.points;
+  for (std::size_t f = 0; f < torus.face_count(); ++f) {
+    const FaceView v = torus.face(f);
+    if (v[0] != 0 && v[1] != 0 && v[2] != 0) in.add_triangle(v[0], v[1], v[2]);
+  }
+  REQUIRE(in.face_count() < torus.face_count());
+  const RebuildResult result = rebuild(in);
+  const RebuildReport& r = result.report;
+  const Soup out = written(result, "rebuild_kept.off");
+  check_solid(in, out, r, 1, 0);
+  CHECK(r.kept_patches >= 1);
+  std::set<std::array<Point3d, 3>> out_faces;
+  for (std::size_t f = 0; f < out.face_count(); ++f) {
+    std::array<Point3d, 3> c{out.points[out.face(f)[0]], out.points[out.face(f)[1]], out.points[out.face(f)[2]]};
+    std::sort(c.begin(), c.end());
+    out_faces.insert(c);
+  }
+  std::set<Index> on_rim;
+  for (const Edge& e : analyze_topology(in).boundary_edges) on_rim.insert({e.a, e.b});
+  std::vector<std::array<Point3d, 3>> rim;  // the faces at the opening
+  for (std::size_t f = 0; f < in.face_count(); ++f) {
+    const FaceView v = in.face(f);
+    if (on_rim.count(v[0]) || on_rim.count(v[1]) || on_rim.count(v[2]))
+      rim.push_back({in.points[v[0]], in.points[v[1]], in.points[v[2]]});
+  }
+  REQUIRE_FALSE(rim.empty());
+  const detail::SurfaceDistance to_rim(rim);
+  std::size_t far = 0, kept = 0;
+  for (std::size_t f = 0; f < in.face_count(); ++f) {
+    std::array<Point3d, 3> c{in.points[in.face(f)[0]], in.points[in.face(f)[1]], in.points[in.face(f)[2]]};
+    bool away = true;
+    for (const Point3d& p : c) away = away && to_rim.squared_distance(p) > std::pow(3 * r.cell, 2);
+    if (!away) continue;
+    ++far;
+    std::sort(c.begin(), c.end());
+    kept += out_faces.count(c);
+  }
+  CHECK(far > in.face_count() / 2);
+  CHECK(kept == far);
+  CHECK(r.kept_faces >= far);
+  CHECK(r.input_to_output <= r.cell);
 }
 
 TEST_CASE("rebuild: facets far from the defects of a dirty mesh come out exactly as they were", "[rebuild]") {

@@ -637,9 +637,17 @@ namespace {
 // holes touch (the smaller goes), a strip triangle would be degenerate, a
 // kept point coincides with a grid vertex, the joined surface is not a
 // closed 2-manifold at some vertex, or — decided exactly by the oracle on the
-// joined surface — a kept or strip face intersects anything; in that last
-// case the patch first shrinks where it failed (the kept facets around the
-// offending corners are let go) and is zipped again, up to eight times.
+// joined surface — a kept or strip face intersects anything, or a strip
+// face folds onto a neighbour (normals more than 179 degrees apart: TetGen's
+// "nearly self-intersecting facets"). Before giving up, the join is mended
+// and tried again: a grid face a strip runs across goes into the hole (on
+// convex folds, where facets several cells wide meet the grid's, the strip
+// dips under the faces next to the hole), the grid faces at the loop corners
+// of strip faces that cross or fold go too (only faces within two cells of
+// the patch: strips stay short), an island of grid faces left over the patch
+// goes, and where nothing of that is left to try, or the hole's loops
+// outnumber the patch's (an unkept neck narrower than a cell), the patch
+// shrinks there (up to eight times).
 // Kept vertices are frozen in coarsening, sharpening and decimation.
 
 struct KeptRegions {
@@ -857,9 +865,15 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
     std::vector<OutVertex> out_vertices;
     std::vector<Tri> out_tris;
     std::vector<Index> out_source;  // per output vertex: its point of f (kNoIndex: a grid vertex)
+    std::vector<Index> grid_of;     // per output vertex: its grid vertex (kNoIndex: a kept point)
     std::vector<char> drop(T, 0);   // kept facets to let go before the next attempt
     bool shrink = false;
-    for (int round = 0; round < 12 && !shrink; ++round) {
+    // Grid faces left as islands over a patch (their vertices not covered,
+    // all within a cell of it, no loop of the patch to zip them to): taken
+    // out with the patch.
+    std::vector<std::int64_t> island(tris.size(), -1);
+    for (int round = 0; round < 24 && !shrink; ++round) {
+      bool islands = false;
       std::vector<char> fails = give_up;
       // Grid faces taken out, by patch.
       std::vector<std::int64_t> removed(tris.size(), -1);
@@ -872,6 +886,8 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
           }
           if (removed[t] < 0 || size[std::size_t(p)] > size[std::size_t(removed[t])]) removed[t] = p;
         }
+      for (std::size_t t = 0; t < tris.size(); ++t)
+        if (removed[t] < 0 && island[t] >= 0 && !give_up[std::size_t(island[t])]) removed[t] = island[t];
       // Where the hole's boundary passes a grid vertex twice (a neck), the
       // faces around that vertex go too.
       for (int pass = 0; pass < 16; ++pass) {
@@ -958,14 +974,17 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
       out_vertices.clear();
       out_tris.clear();
       std::vector<std::int64_t> out_patch;  // per output triangle: its patch (-1: a grid face)
+      std::vector<std::uint32_t> out_grid;  // per output grid face: its grid triangle
       std::vector<Index> id(f.points.size(), kNoIndex);
       std::vector<Index> grid_id(vertices.size(), kNoIndex);
       out_source.clear();
+      grid_of.clear();
       auto grid_vertex = [&](Index v) {
         if (grid_id[v] == kNoIndex) {
           grid_id[v] = static_cast<Index>(out_vertices.size());
           out_vertices.push_back(vertices[v]);
           out_source.push_back(kNoIndex);
+          grid_of.push_back(v);
         }
         return grid_id[v];
       };
@@ -974,6 +993,7 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
           id[v] = static_cast<Index>(out_vertices.size());
           out_vertices.push_back({f.points[v], std::int64_t(t)});
           out_source.push_back(v);
+          grid_of.push_back(kNoIndex);
         }
         return id[v];
       };
@@ -981,7 +1001,7 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
       for (std::size_t p = 0; p < P; ++p) {
         if (fails[p]) continue;
         std::vector<std::vector<Index>> holes;
-        if (!trace_loops(hole_edges[p], holes) || holes.size() != patch_loops[p].size()) {
+        if (!trace_loops(hole_edges[p], holes) || holes.size() < patch_loops[p].size()) {
           fails[p] = 1;
           continue;
         }
@@ -1015,6 +1035,42 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
           pair[i] = at;
         }
         if (fails[p]) continue;
+        for (std::size_t j = 0; j < holes.size() && !fails[p]; ++j) {
+          if (taken[j]) continue;
+          // the grid faces this unpaired loop bounds, across faces still in
+          std::vector<std::uint32_t> part{grid_halfedge.at(edge_key(holes[j][0], holes[j][1]))};
+          std::unordered_map<std::uint32_t, char> in_part{{part[0], 1}};
+          for (std::size_t q = 0; q < part.size() && part.size() <= tris.size() / 4; ++q)
+            for (int k = 0; k < 3; ++k) {
+              const std::uint32_t u = grid_halfedge.at(edge_key(tris[part[q]][(k + 1) % 3], tris[part[q]][k]));
+              if (removed[u] < 0 && in_part.emplace(u, 1).second) part.push_back(u);
+            }
+          bool over = part.size() <= tris.size() / 4;
+          for (std::size_t q = 0; q < part.size() && over; ++q)
+            for (Index v : tris[part[q]]) over = over && to_kept.squared_distance(vertices[v].p) <= h * h;
+          if (!over) {
+            // Not over the patch: a part of the grid surface the patch's
+            // loops do not reach (a neck of the unkept region narrower than
+            // a cell, its grid faces taken out): the patch shrinks around
+            // it, widening the neck.
+            if (attempt >= kShrinks || part.size() > tris.size() / 4) {
+              fails[p] = 1;
+              break;
+            }
+            shrink = true;
+            for (std::uint32_t u : part)
+              for (Index v : tris[u]) {
+                const Point3d& x = vertices[v].p;
+                for (std::size_t i : to_kept.triangles_near({x[0] - 2 * h, x[1] - 2 * h, x[2] - 2 * h},
+                                                            {x[0] + 2 * h, x[1] + 2 * h, x[2] + 2 * h}))
+                  if (to_kept.squared_distance_to(x, i) <= 4 * h * h) drop[kept_tris[i]] = 1;
+              }
+            break;
+          }
+          for (std::uint32_t u : part) island[u] = std::int64_t(p);
+          islands = true;
+        }
+        if (fails[p] || islands) continue;
         // Zip: A runs with the patch on its left, B with the grid on its left,
         // so they run opposite ways along the strip: advance i on A, j back on B.
         for (std::size_t i = 0; i < patch_loops[p].size() && !fails[p]; ++i) {
@@ -1053,6 +1109,8 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
           }
         }
       }
+      if (shrink) break;
+      if (islands) continue;  // the holes change: trace them again
       // The joined surface: grid faces not taken out by a zipped patch, the
       // zipped patches' facets and strips.
       auto in = [&](std::int64_t p) { return p >= 0 && !fails[std::size_t(p)]; };
@@ -1060,6 +1118,7 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
         if (!in(removed[t])) {
           out_tris.push_back({grid_vertex(tris[t][0]), grid_vertex(tris[t][1]), grid_vertex(tris[t][2])});
           out_patch.push_back(-1);
+          out_grid.push_back(static_cast<std::uint32_t>(t));
         }
       for (std::uint32_t t : kept_tris) {
         const std::int64_t p = patch[t];
@@ -1138,10 +1197,80 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
       bool clean = true;
       for (std::size_t p = 0; p < P; ++p) clean = clean && !(fails[p] && !give_up[p]);
       if (clean) {  // (otherwise the next round builds the surface again)
-        for (const FacePair& q : find_self_intersections(joined, so))
+        // A strip across a grid face next to the hole: the face goes into
+        // the hole (the loop then runs round it), and the strip is zipped
+        // again. Anything else: the patch shrinks there.
+        bool widened = false;
+        // What the oracle finds, and strip faces folded onto a neighbour
+        // (normals more than 179 degrees apart: no intersection, but a fold
+        // TetGen stumbles on, and no surface a user expects).
+        std::vector<FacePair> bad = find_self_intersections(joined, so);
+        {
+          std::unordered_map<std::uint64_t, std::uint32_t> face_of;  // a -> b: its face
+          for (std::size_t t = 0; t < out_tris.size(); ++t)
+            for (int k = 0; k < 3; ++k)
+              face_of.emplace(edge_key(out_tris[t][k], out_tris[t][(k + 1) % 3]), std::uint32_t(t));
+          const double cos_fold = std::cos(179 * M_PI / 180);
+          auto unit_normal = [&](std::size_t t) {
+            const Point3d n = normal(out_vertices[out_tris[t][0]].p, out_vertices[out_tris[t][1]].p,
+                                     out_vertices[out_tris[t][2]].p);
+            const double l = std::sqrt(dot(n, n));
+            return Point3d{n[0] / l, n[1] / l, n[2] / l};
+          };
+          for (std::size_t t = 0; t < out_tris.size(); ++t) {
+            if (out_patch[t] < 0 || std::all_of(out_tris[t].begin(), out_tris[t].end(),
+                                                [&](Index v) { return out_source[v] != kNoIndex; }))
+              continue;  // only strip faces
+            const Point3d n = unit_normal(t);
+            for (int k = 0; k < 3; ++k) {
+              const auto it = face_of.find(edge_key(out_tris[t][(k + 1) % 3], out_tris[t][k]));
+              if (it != face_of.end() && dot(n, unit_normal(it->second)) < cos_fold)
+                bad.push_back({std::min<std::size_t>(t, it->second), std::max<std::size_t>(t, it->second)});
+            }
+          }
+        }
+        // Mended first (the hole widens, by grid faces within two cells of
+        // the patch: strips stay short, near the surface), all at once; the
+        // patch shrinks only where no mending is left to try.
+        auto near_patch = [&](std::uint32_t u) {
+          for (Index v : tris[u])
+            if (to_kept.squared_distance(vertices[v].p) > 4 * h * h) return false;
+          return true;
+        };
+        std::vector<FacePair> hard;
+        for (const FacePair& q : bad) {
+          clean = false;
+          if (round >= 23) {
+            hard.push_back(q);
+            continue;
+          }
+          const std::size_t grid_face = out_patch[q.first] < 0 ? q.first : q.second;
+          const std::size_t other = q.first + q.second - grid_face;
+          if (out_patch[grid_face] < 0 && out_patch[other] >= 0 && near_patch(out_grid[grid_face])) {
+            island[out_grid[grid_face]] = out_patch[other];
+            widened = true;
+            continue;
+          }
+          // Two strip faces folded over or across each other (or a strip and
+          // a kept face): the grid faces at their loop corners go into the
+          // hole, evening the loop out there.
+          bool evened = false;
+          for (std::size_t t : {q.first, q.second})
+            for (Index v : out_tris[t]) {
+              if (out_source[v] != kNoIndex) continue;
+              for (std::uint32_t u : grid_star[grid_of[v]])
+                if (removed[u] < 0 && island[u] < 0 && near_patch(u)) {
+                  island[u] = out_patch[t];
+                  evened = true;
+                }
+            }
+          widened = widened || evened;
+          if (!evened) hard.push_back(q);
+        }
+        if (widened) continue;
+        for (const FacePair& q : hard)
           for (std::size_t t : {q.first, q.second}) {
             if (out_patch[t] < 0) continue;
-            clean = false;
             if (attempt >= kShrinks) {
               fails[std::size_t(out_patch[t])] = 1;
               continue;
@@ -1160,7 +1289,7 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
           changed = true;
         }
       if (clean && !changed) break;
-      if (round == 11) {  // still failing: give up every patch
+      if (round == 23) {  // still failing: give up every patch
         std::fill(give_up.begin(), give_up.end(), 1);
         KeptRegions none;
         none.given_up = P;
