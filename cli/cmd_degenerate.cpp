@@ -59,6 +59,8 @@ nlohmann::json to_json(const DegenerateArgs& a, const DegenerateReport& r, doubl
         {"cap_slices_refused", r.cap_slices_refused},
         {"needle_slices", r.needle_slices},
         {"needle_slices_refused", r.needle_slices_refused},
+        {"wedge_tips", r.wedge_tips},
+        {"wedge_cuts", r.wedge_cuts},
         {"collapses", r.collapses},
         {"flips", r.flips}}},
       {"topology", {{"input", topology_json(r.topology_in)}, {"output", topology_json(r.topology_out)}}},
@@ -90,11 +92,11 @@ void print_text(const DegenerateArgs& a, const DegenerateReport& r) {
   std::printf("  faces: %zu in, %zu repeated-index removed, %zu after zero-area, %zu after slicing (peak %zu), %zu out\n",
               r.faces_in, r.repeated_index_faces, r.faces_after_zero_area, r.faces_after_slicing, r.peak_faces,
               r.faces_out);
-  std::printf("  slices: %zu grid (%zu refused), %zu cap (%zu refused, %s%s), %zu needle (%zu refused); "
-              "%zu collapses, %zu flips\n",
+  std::printf("  slices: %zu grid (%zu refused), %zu cap (%zu refused, %s%s), %zu needle (%zu refused), "
+              "%zu across %zu wedge tips; %zu collapses, %zu flips\n",
               r.grid_slices, r.grid_slices_refused, r.cap_slices, r.cap_slices_refused,
               r.global_slices ? "global" : "local", r.interleave ? ", interleaved" : "", r.needle_slices,
-              r.needle_slices_refused, r.collapses, r.flips);
+              r.needle_slices_refused, r.wedge_cuts, r.wedge_tips, r.collapses, r.flips);
   std::printf("  after:  %s\n", counts(r.after).c_str());
   std::printf("  topology: euler %ld -> %ld, components %zu -> %zu, boundary loops %zu -> %zu%s\n", r.topology_in.euler,
               r.topology_out.euler, r.topology_in.components, r.topology_out.components, r.topology_in.boundary_loops,

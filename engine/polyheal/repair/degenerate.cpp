@@ -174,7 +174,10 @@ class Pipeline {
   /// decimation right after it uses them, and removes the cut's other points
   /// where they are not needed. At most `budget` slices. Returns the number
   /// of slices made.
-  std::size_t slice_needles(std::size_t budget, bool short_cuts, bool second_longest) {
+  ///
+  /// With `wedges`, a needle that is the tip of a wedge gets cut_wedge()
+  /// instead.
+  std::size_t slice_needles(std::size_t budget, bool short_cuts, bool second_longest, bool wedges) {
     refresh_frozen();
     std::size_t made = 0;
     for (face_descriptor needle : faces_of(Shape::needle)) {
@@ -183,6 +186,14 @@ class Pipeline {
       // stop at three times the input's size and report what is left.
       if (made >= budget || mesh_.number_of_faces() > face_limit_) break;
       if (mesh_.is_removed(needle) || classify_face(mesh_, needle, cos_cap_, cos_needle_) != Shape::needle) continue;
+      if (wedges) {
+        const std::size_t cuts = cut_wedge(needle);
+        if (cuts > 0) {
+          made += cuts;
+          continue;
+        }
+        if (mesh_.is_removed(needle) || classify_face(mesh_, needle, cos_cap_, cos_needle_) != Shape::needle) continue;
+      }
       // The plane is perpendicular to the needle's longest edge, or on
       // alternate rounds to its second longest (the other long side), which
       // cuts the neighbourhood differently when the first cut did not help.
@@ -228,6 +239,123 @@ class Pipeline {
       after_slice(s);
       tidy(s);
     }
+    return made;
+  }
+
+  /// A needle whose short edge is wider than half the tolerance cannot be
+  /// collapsed within it. Where it is the tip of a wedge (two long sides
+  /// meeting at angle t at apex a: a CAD face's sharp corner, a tapering
+  /// strip), halving cuts do not help either: a band between cuts at r/2 and
+  /// r from a splits into a triangle whose smallest angle is about t again.
+  /// So the tip is cut across by planes perpendicular to its longest side,
+  /// at distances r_k from a that fall by a factor q per cut, until it is
+  /// narrower than a quarter of the tolerance (a collapse removes it then).
+  /// The band between cuts at q r and r, of widths q r tan t and r tan t,
+  /// splits into two triangles whose smallest angles are about
+  /// atan(q tan t / (1 - q)) and atan(tan t / (1 - q)): at least the needle
+  /// angle when 1/q - 1 <= tan t / tan(needle angle); q is set with a margin
+  /// (3/4 of that). This is the paper's §5 supersampling, placed where a
+  /// wedge needs it. Each cut is a verified local slice, ended about a tip's
+  /// width beyond the tip (it circles a where the faces around a allow), and
+  /// never snaps a itself; the decimation run after them (tidy()) removes
+  /// the tip and whatever split points are not needed. Returns the number
+  /// of cuts made (0: not a wedge tip, or the first cut was refused).
+  std::size_t cut_wedge(face_descriptor needle) {
+    std::array<vertex_descriptor, 3> v;
+    std::array<Point3d, 3> p;
+    {
+      halfedge_descriptor h = mesh_.halfedge(needle);
+      for (int k = 0; k < 3; ++k, h = mesh_.next(h)) {
+        v[k] = mesh_.target(h);
+        p[k] = approx_point3d(mesh_.point(v[k]));
+      }
+    }
+    auto length = [](const Point3d& x, const Point3d& y) {
+      return std::sqrt((x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2]));
+    };
+    // the apex: the corner opposite the shortest edge
+    int k = 0;
+    for (int j = 1; j < 3; ++j)
+      if (length(p[(j + 1) % 3], p[(j + 2) % 3]) < length(p[(k + 1) % 3], p[(k + 2) % 3])) k = j;
+    const vertex_descriptor a = v[k];
+    vertex_descriptor b = v[(k + 1) % 3], c = v[(k + 2) % 3];
+    double ab = length(p[k], p[(k + 1) % 3]), ac = length(p[k], p[(k + 2) % 3]);
+    if (ab < ac) {
+      std::swap(b, c);
+      std::swap(ab, ac);
+    }
+    const double width = length(p[(k + 1) % 3], p[(k + 2) % 3]);
+    if (!(width > 0.5 * r_.tolerance) || !(ac > 0)) return 0;
+    // the angle at a, from the sides (law of cosines)
+    const double cos_t = std::clamp((ab * ab + ac * ac - width * width) / (2 * ab * ac), -1.0, 1.0);
+    const double tan_t = std::sqrt(std::max(0.0, 1 - cos_t * cos_t)) / cos_t;
+    if (!(tan_t > 0) || cos_t <= 0) return 0;
+    // A tip: its short edge runs across the wedge (both angles at it at
+    // least 45 degrees). A needle whose short edge runs along one side of a
+    // strip (angles near 0 and 180 at it) is no tip: halving cuts serve it.
+    auto cos_at = [&](double adjacent, double other, double opposite) {
+      return (adjacent * adjacent + other * other - opposite * opposite) / (2 * adjacent * other);
+    };
+    const double cos_half = std::sqrt(0.5);
+    if (std::abs(cos_at(width, ab, ac)) > cos_half || std::abs(cos_at(width, ac, ab)) > cos_half) return 0;
+    const double rate = 1 + 0.75 * tan_t / std::tan(o_.needle_angle * 3.14159265358979323846 / 180.0);  // 1/q
+    const int cuts = static_cast<int>(std::ceil(std::log(width / (0.25 * r_.tolerance)) / std::log(rate)));
+    if (cuts < 1 || cuts > 48) return 0;
+    // The planes go through double points (as slice_needles' do), keeping
+    // split points one exact construction deep.
+    const Point pa = rounded(mesh_.point(a)), pb = rounded(mesh_.point(b));
+    const Kernel::Vector_3 axis = pb - pa;
+    const Point3d da = approx_point3d(pa), db = approx_point3d(pb);
+    std::vector<face_descriptor> faces;
+    std::vector<vertex_descriptor> fresh;
+    face_descriptor tip = needle;
+    double r = ab;
+    std::size_t made = 0;
+    for (int i = 0; i < cuts; ++i) {
+      r /= rate;
+      const double t = r / ab;
+      const Point at(da[0] + t * (db[0] - da[0]), da[1] + t * (db[1] - da[1]), da[2] + t * (db[2] - da[2]));
+      detail::SliceOptions so = slice_options();
+      so.seed = tip;
+      so.protected_vertices = {a};
+      // ended about a tip's width beyond it: run on for 1.5 r, as needle
+      // cuts are, the cuts left needles along the apex's other edges (tried
+      // on a knife whose end face has a 3-degree tip: they ran up its side
+      // faces along the blade)
+      so.radius = 1.5 * r * tan_t;
+      const detail::SliceResult s = detail::slice_by_plane(mesh_, Kernel::Plane_3(at, axis), so);
+      if (s.rejected || s.edges_split == 0) break;  // the cuts so far still serve (bands of fine faces)
+      ++r_.wedge_cuts;
+      ++made;
+      after_slice(s);
+      faces.insert(faces.end(), s.faces.begin(), s.faces.end());
+      fresh.insert(fresh.end(), s.vertices.begin(), s.vertices.end());
+      // the next seed: the piece at a between its two sides
+      tip = Mesh::null_face();
+      for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(a), mesh_)) {
+        const face_descriptor f = mesh_.face(g);
+        if (f == Mesh::null_face()) continue;
+        const vertex_descriptor x = mesh_.source(g), y = mesh_.target(mesh_.next(g));
+        auto on_side = [&](vertex_descriptor q, vertex_descriptor end) {
+          return q == end || (CGAL::collinear(mesh_.point(a), mesh_.point(q), mesh_.point(end)) &&
+                              CGAL::collinear_are_ordered_along_line(mesh_.point(a), mesh_.point(q), mesh_.point(end)));
+        };
+        if ((on_side(x, b) && on_side(y, c)) || (on_side(x, c) && on_side(y, b))) {
+          tip = f;
+          break;
+        }
+      }
+      if (tip == Mesh::null_face()) break;
+    }
+    if (made == 0) return 0;
+    ++r_.wedge_tips;
+    detail::SliceResult all;
+    for (face_descriptor f : faces)
+      if (!mesh_.is_removed(f)) all.faces.push_back(f);
+    std::sort(all.faces.begin(), all.faces.end());
+    all.faces.erase(std::unique(all.faces.begin(), all.faces.end()), all.faces.end());
+    all.vertices = fresh;
+    tidy(all);
     return made;
   }
 
@@ -376,11 +504,15 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   // supersampling. Bounded: slices per round at most twice the bad faces
   // left (plus a constant), at most 24 rounds, and three without progress.
   // Needle cuts are short (across the needle's neighbourhood) while that
-  // makes progress, then run their full course.
+  // makes progress, then run their full course, and wedge tips get their
+  // series of cuts (cut_wedge()). Tips come last on purpose: from the first
+  // round, on fan-tessellated CAD faces that midpoint cuts clear, they left
+  // more faces and more needles (cgal__joint: 68 left, cad_cylinder: 8).
   std::size_t bad = pipeline.bad_faces().size(), stalled = 0;
   bool short_cuts = true;
   for (int round = 0; round < 24 && bad > 0 && stalled < 3; ++round) {
-    const std::size_t made = pipeline.slice_caps() + pipeline.slice_needles(2 * bad + 16, short_cuts, round % 2 == 1);
+    const std::size_t made =
+        pipeline.slice_caps() + pipeline.slice_needles(2 * bad + 16, short_cuts, round % 2 == 1, !short_cuts);
     pipeline.decimate(pipeline.bad_faces());
     const std::size_t now = pipeline.bad_faces().size();
     if (now >= bad && short_cuts) {

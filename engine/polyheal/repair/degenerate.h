@@ -92,6 +92,7 @@ struct DegenerateReport {
   std::size_t grid_slices = 0, grid_slices_refused = 0;
   std::size_t cap_slices = 0, cap_slices_refused = 0;
   std::size_t needle_slices = 0, needle_slices_refused = 0;
+  std::size_t wedge_tips = 0, wedge_cuts = 0;  // cut_wedge(): tips given a series of cuts, cuts made
   std::size_t collapses = 0, flips = 0;
   double seconds_preprocess = 0, seconds_zero_area = 0, seconds_slicing = 0, seconds_decimation = 0,
          seconds_certify = 0;
