@@ -781,6 +781,11 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
   std::unordered_map<std::uint64_t, std::uint32_t> grid_halfedge;  // a -> b: its grid triangle
   for (std::size_t t = 0; t < tris.size(); ++t)
     for (int k = 0; k < 3; ++k) grid_halfedge.emplace(edge_key(tris[t][k], tris[t][(k + 1) % 3]), std::uint32_t(t));
+  // grid_across[t][k]: the grid triangle across edge k (tris[t][k] -> tris[t][k+1])
+  // of t, looked up once (the rounds below ask it for every face, many times).
+  std::vector<std::array<std::uint32_t, 3>> grid_across(tris.size());
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) grid_across[t][k] = grid_halfedge.at(edge_key(tris[t][(k + 1) % 3], tris[t][k]));
   std::vector<Point3d> grid_points;
   for (const OutVertex& v : vertices) grid_points.push_back(v.p);
   std::sort(grid_points.begin(), grid_points.end());
@@ -872,6 +877,12 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
     // all within a cell of it, no loop of the patch to zip them to): taken
     // out with the patch.
     std::vector<std::int64_t> island(tris.size(), -1);
+    // The last round's holes and given-up patches: a round that takes out
+    // the same grid faces as the last builds the same joined surface, so
+    // the mending did nothing there and what is left goes to shrinking now
+    // (hornbug went round the same state 17 times).
+    std::vector<std::int64_t> last_removed;
+    std::vector<char> last_give_up;
     for (int round = 0; round < 24 && !shrink; ++round) {
       bool islands = false;
       std::vector<char> fails = give_up;
@@ -895,7 +906,7 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
         for (std::size_t t = 0; t < tris.size(); ++t) {
           if (removed[t] >= 0) continue;
           for (int k = 0; k < 3; ++k)
-            if (removed[grid_halfedge.at(edge_key(tris[t][(k + 1) % 3], tris[t][k]))] >= 0) ++starts[tris[t][k]];
+            if (removed[grid_across[t][k]] >= 0) ++starts[tris[t][k]];
         }
         bool widened = false;
         // A grid face with two edges on the hole juts into it: it would hide
@@ -906,7 +917,7 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
           int open = 0;
           std::int64_t p = -1;
           for (int k = 0; k < 3; ++k) {
-            const std::int64_t q = removed[grid_halfedge.at(edge_key(tris[t][(k + 1) % 3], tris[t][k]))];
+            const std::int64_t q = removed[grid_across[t][k]];
             if (q >= 0) {
               ++open;
               p = q;
@@ -957,7 +968,7 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
         if (removed[t] >= 0) continue;
         for (int k = 0; k < 3; ++k) {
           const Index a = tris[t][k], b = tris[t][(k + 1) % 3];
-          const std::int64_t p = removed[grid_halfedge.at(edge_key(b, a))];
+          const std::int64_t p = removed[grid_across[t][k]];
           if (p < 0) continue;
           hole_edges[std::size_t(p)].push_back({a, b});
           all_hole_edges.push_back({a, b});
@@ -1042,7 +1053,7 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
           std::unordered_map<std::uint32_t, char> in_part{{part[0], 1}};
           for (std::size_t q = 0; q < part.size() && part.size() <= tris.size() / 4; ++q)
             for (int k = 0; k < 3; ++k) {
-              const std::uint32_t u = grid_halfedge.at(edge_key(tris[part[q]][(k + 1) % 3], tris[part[q]][k]));
+              const std::uint32_t u = grid_across[part[q]][k];
               if (removed[u] < 0 && in_part.emplace(u, 1).second) part.push_back(u);
             }
           bool over = part.size() <= tris.size() / 4;
@@ -1186,6 +1197,9 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
           if (!blamed) std::fill(fails.begin(), fails.end(), 1);
         }
       }
+      const bool stalled = removed == last_removed && give_up == last_give_up;
+      last_removed = removed;
+      last_give_up = give_up;
       // Exactly: no kept or strip face may intersect anything.
       Soup joined;
       for (const OutVertex& v : out_vertices) joined.points.push_back(v.p);
@@ -1240,7 +1254,7 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
         std::vector<FacePair> hard;
         for (const FacePair& q : bad) {
           clean = false;
-          if (round >= 23) {
+          if (round >= 23 || stalled) {
             hard.push_back(q);
             continue;
           }
