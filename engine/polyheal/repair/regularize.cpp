@@ -550,6 +550,9 @@ class Regularizer {
       if (const auto it = placed.find(id); it != placed.end()) return it->second;
       const CDT::Vertex_handle h = cdt.insert(proj(points_[id], i, j));
       if (h->info().id < 0) h->info().id = id;
+      // a point inserted again (a segment's end is the next one's start)
+      // would be located anew and found equal to its vertex: an exact test
+      placed.emplace(id, h);
       return h;
     };
     // each member's corners in the projection and its orientation there
