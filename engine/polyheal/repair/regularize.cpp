@@ -241,7 +241,7 @@ class Regularizer {
     const std::optional<int> w = winding_outside(q);
     if (!w) return;  // left for the growth to reach; unclassified if it never does
     pieces_[q].front = *w;
-    flood(q, *w <= 0 && *w + pieces_[q].weight >= 1 ? kValid : kInvalid);
+    flood(q);
   }
 
   /// The winding number of the input surface just outside piece q (on the
@@ -357,14 +357,17 @@ class Regularizer {
 
   // ---- growth (§3.4, §3.6) ------------------------------------------------
 
-  /// Marks q with `state` and spreads it. Valid: to every continuation
-  /// (§3.4 through intersection-free neighbours, §3.6 across the river),
-  /// each with the winding number on its outer side. Invalid: only across
-  /// edges with exactly two pieces (the winding numbers on both sides carry
-  /// over) and never into a triangle not yet split.
-  void flood(Index q, State state) {
+  /// Classifies q (its outer winding number set) and spreads the winding
+  /// numbers: across an edge with two pieces the neighbour has the same
+  /// outer winding; across an intersection curve (§3.6, an edge with more
+  /// than two pieces) every piece around gets its own from the sorted order
+  /// (continuation), valid and invalid alike, so an invalid region cut off
+  /// by intersection curves needs no winding-number line of its own. A
+  /// piece is valid when winding <= 0 outside and >= 1 inside.
+  void flood(Index q) {
     std::vector<Index> front{q};
-    pieces_[q].state = state;
+    classify(q, pieces_[q].front);
+    std::vector<std::pair<Index, int>> next;
     while (!front.empty()) {
       const Index p = front.back();
       front.pop_back();
@@ -372,39 +375,34 @@ class Regularizer {
       const Piece piece = pieces_[p];
       for (int e = 0; e < 3; ++e) {
         const Index a = piece.v[e], b = piece.v[(e + 1) % 3];
-        std::optional<std::pair<Index, int>> next;  // piece, its front winding
-        if (state == kValid) {
-          const std::vector<Index> around = pieces_around(a, b, true);
-          if (around.size() == 2) {
-            const Index other = around[0] == p ? around[1] : around[0];
-            if (traverses(other, b, a) && pieces_[other].weight == piece.weight) next = {other, piece.front};
-          } else if (around.size() > 2) {
-            next = continuation(p, a, b, around);
-          }
-          if (!next) {
-            ++r_.orientation_conflicts;
-            continue;
-          }
-        } else {
-          const std::vector<Index> around = pieces_around(a, b, false);
-          if (around.size() != 2) continue;
+        next.clear();
+        const std::vector<Index> around = pieces_around(a, b, true);
+        if (around.size() == 2) {
           const Index other = around[0] == p ? around[1] : around[0];
-          if (!traverses(other, b, a) || pieces_[other].weight != piece.weight) continue;
-          const Index src = pieces_[other].source;
-          if (!partners_[src].empty() && !split_[src]) continue;  // partially valid, perhaps
-          next = {other, piece.front};
+          if (traverses(other, b, a) && pieces_[other].weight == piece.weight) next.push_back({other, piece.front});
+        } else if (around.size() > 2) {
+          if (river_done_.count(edge_key(a, b))) continue;  // every piece around is classified
+          around_windings(p, a, b, around, piece.state == kValid, next);
+          if (!next.empty()) river_done_.insert(edge_key(a, b));
         }
-        Piece& n = pieces_[next->first];
-        if (n.state == state) continue;
-        if (n.state != kUnvisited) {
-          ++r_.orientation_conflicts;  // reached as valid and as invalid
-          continue;
+        if (piece.state == kValid && std::none_of(next.begin(), next.end(), [&](const auto& n) {
+              return traverses(n.first, b, a) && n.second <= 0 && n.second + pieces_[n.first].weight >= 1;
+            }))
+          ++r_.orientation_conflicts;  // no compatible continuation
+        for (const auto& [n, winding] : next) {
+          Piece& np = pieces_[n];
+          if (np.state != kUnvisited) continue;
+          classify(n, winding);
+          front.push_back(n);
         }
-        n.state = state;
-        n.front = next->second;
-        front.push_back(next->first);
       }
     }
+  }
+
+  void classify(Index q, int winding) {
+    Piece& p = pieces_[q];
+    p.front = winding;
+    p.state = winding <= 0 && winding + p.weight >= 1 ? kValid : kInvalid;
   }
 
   bool traverses(Index p, Index a, Index b) const {
@@ -440,9 +438,14 @@ class Regularizer {
 
   /// §3.6 crossing the river, generalised: the pieces around edge ab sorted
   /// by angle, starting from p's outer side; the winding number of each
-  /// wedge followed from p's outer side; the first piece that faces a wedge
-  /// of winding <= 0 and backs onto one of winding >= 1 (with that winding).
-  std::optional<std::pair<Index, int>> continuation(Index p, Index a, Index b, const std::vector<Index>& around) {
+  /// wedge followed from p's outer side, so each piece's outer winding
+  /// (appended to `out`). The paper's continuation is the first piece that
+  /// faces a wedge of winding <= 0 and backs onto one of winding >= 1.
+  /// Coincident pieces of different planes are an error when p is valid
+  /// (they would be on the output); around an invalid p the edge is left
+  /// to the seeds (out unchanged).
+  void around_windings(Index p, Index a, Index b, const std::vector<Index>& around, bool strict,
+                       std::vector<std::pair<Index, int>>& out) {
     const EPoint& A = points_[a];
     const EVector u = points_[b] - A;
     const EVector n0 = CGAL::cross_product(u, points_[third(p, a, b)] - A);
@@ -464,8 +467,10 @@ class Regularizer {
       if (root(pieces_[q].source) != plane) {
         const CGAL::Sign side = CGAL::sign(n0 * w);
         half = side == CGAL::POSITIVE ? 0 : side == CGAL::NEGATIVE ? 2 : 1;
-        if (half == 1 && CGAL::is_positive(n0 * CGAL::cross_product(u, w)))
+        if (half == 1 && CGAL::is_positive(n0 * CGAL::cross_product(u, w))) {
+          if (!strict) return;
           throw UnsupportedInput(coplanar_message(pieces_[p].source, pieces_[q].source));
+        }
       }
       items.push_back({q, w, half, traverses(q, b, a)});
     }
@@ -476,19 +481,21 @@ class Regularizer {
     };
     std::sort(items.begin(), items.end(), before);
     for (std::size_t k = 1; k < items.size(); ++k)
-      if (!before(items[k - 1], items[k]))  // same half-plane: coincident pieces
+      if (!before(items[k - 1], items[k])) {  // same half-plane: coincident pieces
+        if (!strict) return;
         throw UnsupportedInput(coplanar_message(pieces_[items[k - 1].piece].source, pieces_[items[k].piece].source));
+      }
     int winding = pieces_[p].front;
     for (const Item& item : items) {
       const int weight = pieces_[item.piece].weight;
-      if (item.entering) {
-        if (winding <= 0 && winding + weight >= 1) return std::make_pair(item.piece, winding);
+      if (item.entering) {  // crossing it enters its inside: its outer side is behind
+        out.push_back({item.piece, winding});
         winding += weight;
-      } else {
+      } else {  // crossing it leaves its inside: its outer side is ahead
         winding -= weight;
+        out.push_back({item.piece, winding});
       }
     }
-    return std::nullopt;
   }
 
   Index third(Index p, Index a, Index b) const {
@@ -581,7 +588,7 @@ class Regularizer {
       }
     seconds_intersections += seconds_since(t0);
     // crossings of segments (§3.5 step 2), lifted back onto the plane
-    const EPoint& A = points_[fv[0]];
+    const EPoint A = points_[fv[0]];  // a copy: vertex_id() below grows points_
     for (auto h = cdt.finite_vertices_begin(); h != cdt.finite_vertices_end(); ++h) {
       if (h->info().id >= 0) continue;
       std::array<K::FT, 3> c;
@@ -825,6 +832,7 @@ class Regularizer {
   };
   std::unordered_map<std::pair<std::uint64_t, Index>, Index, PairHash> crossings_;  // (edge, face) -> point
   std::unordered_map<std::uint64_t, std::vector<Index>> on_edge_;                   // input edge -> its crossings
+  std::unordered_set<std::uint64_t> river_done_;  // intersection-curve edges whose pieces are all classified
   std::vector<char> zero_area_;                                         // per input face (§3.1)
   UnionFind cluster_;                                                   // over coplanar overlaps
   std::unordered_map<Index, std::vector<Index>> members_;              // cluster root -> its faces (2 or more)

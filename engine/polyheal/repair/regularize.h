@@ -35,8 +35,13 @@
 //   (and so 1 on its inner side): the output bounds { winding >= 1 }, the
 //   union of the solids the input encloses. So every component gets a seed,
 //   components inside another are removed (reported), and cavities (inward
-//   facing shells inside a solid) are kept. An invalid seed's
-//   intersection-free neighbourhood is marked invalid without sub-triangulation.
+//   facing shells inside a solid) are kept. The wave carries the winding
+//   number, not only the verdict: across an edge with two (sub-)triangles it
+//   is the same, across an intersection curve each (sub-)triangle around
+//   the edge gets its own from the sorted order below, valid or not. So one
+//   line classifies a whole connected input (one seed on every raw offset
+//   measured, where a line per invalid region cut off by intersection curves
+//   took ~10% of the time on dense ones).
 // - Crossing the river (§3.6: "by considering the normal orientation
 //   compatibility"). At an edge where more than two (sub-)triangles meet,
 //   they are sorted around the edge exactly, and the wave leaving a valid one
@@ -45,8 +50,9 @@
 //   separates a wedge of winding <= 0 from one of winding >= 1 and faces the
 //   first. In the paper's case (two triangles crossing) this is the
 //   orientation-compatible sub-triangle of the counterpart.
-// - Laziness (§5 suggestion). Segments and sub-triangulations are computed
-//   only for triangles the wave front reaches and the triangles they touch.
+// - Laziness (§5 suggestion). Nothing is computed up front: a triangle's
+//   segments and sub-triangulation when the wave front reaches it or a
+//   triangle it touches.
 //
 // Coplanar overlaps (and duplicate faces): the triangles overlapping in one
 // plane are sub-triangulated together, and a piece covered by several of them
