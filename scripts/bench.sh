@@ -236,6 +236,12 @@ if want regularize; then
   raw_offset "$root/fixtures/thingi10k_65004.stl" -0.69 raw_offset_thingi10k_65004_-0.69.off
   raw_offset "$root/fixtures/torus_knot_20k.off" 0.6 raw_offset_torus_knot_20k_+0.6.off
   raw_offset "$root/fixtures/torus_knot_20k.off" -0.1 raw_offset_torus_knot_20k_-0.1.off
+  # CAD-like corpus meshes with many sharp edges: dense raw offsets (strips and
+  # patches at every sharp edge and corner cross their neighbours), 2% of the
+  # bbox diagonal
+  raw_offset "$corpus/vhacd__rocker-arm.off" 0.0233 raw_offset_rocker-arm_+2pc.off
+  raw_offset "$corpus/vhacd__rocker-arm.off" -0.0233 raw_offset_rocker-arm_-2pc.off
+  raw_offset "$corpus/vhacd__Hand1.off" 4.814 raw_offset_Hand1_+2pc.off
   while IFS= read -r f; do reg_inputs+=("$corpus/$f"); done < <(awk -F'\t' 'NR > 1 && $11 > 0 && $16 == 0 {print $1}' "$corpus/MANIFEST.tsv")
   for f in "${reg_inputs[@]}"; do
     [ -f "$f" ] || continue
