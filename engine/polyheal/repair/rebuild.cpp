@@ -16,6 +16,7 @@
 #include <memory>
 #include <numeric>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "polyheal/inspect/local_index.h"
 #include "polyheal/inspect/report.h"
@@ -797,6 +798,22 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
   // there (the kept facets around the offending corners are let go) and is
   // joined again; after kShrinks attempts such a patch is given up whole.
   constexpr int kShrinks = 8;
+  // The exact check of the joined surface, across rounds and attempts: a
+  // face is named by its corners (input point or grid vertex), so a pair of
+  // faces the last check saw gives the same answer again. Only faces new
+  // since then are checked (against everything); the last intersecting
+  // pairs whose faces are both still there are carried over.
+  using FaceName = std::array<std::int64_t, 3>;
+  struct FaceNameHash {
+    std::size_t operator()(const FaceName& n) const {
+      std::size_t h = 0;
+      for (std::int64_t x : n) h = (h ^ std::hash<std::int64_t>()(x)) * 0x9E3779B97F4A7C15ull;
+      return h;
+    }
+  };
+  std::unordered_set<FaceName, FaceNameHash> last_checked;
+  std::vector<std::pair<FaceName, FaceName>> last_intersecting;
+  bool checked_before = false;
   for (int attempt = 0;; ++attempt) {
     // A vertex where kept facets meet in more than one fan would pinch the
     // joined surface: the kept facets around it are let go, until none is left.
@@ -1204,8 +1221,15 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
       Soup joined;
       for (const OutVertex& v : out_vertices) joined.points.push_back(v.p);
       for (const Tri& t : out_tris) joined.add_triangle(t[0], t[1], t[2]);
+      std::vector<FaceName> names(out_tris.size());
+      for (std::size_t t = 0; t < out_tris.size(); ++t)
+        for (int k = 0; k < 3; ++k) {
+          const Index v = out_tris[t][k];
+          names[t][k] = out_source[v] != kNoIndex ? std::int64_t(out_source[v]) : -std::int64_t(grid_of[v]) - 1;
+        }
       std::vector<char> only(out_tris.size(), 0);
-      for (std::size_t t = 0; t < out_tris.size(); ++t) only[t] = out_patch[t] >= 0;
+      for (std::size_t t = 0; t < out_tris.size(); ++t)
+        only[t] = checked_before ? !last_checked.count(names[t]) : out_patch[t] >= 0;
       SelfIntersectionOptions so;
       so.only = &only;
       bool clean = true;
@@ -1218,7 +1242,25 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
         // What the oracle finds, and strip faces folded onto a neighbour
         // (normals more than 179 degrees apart: no intersection, but a fold
         // TetGen stumbles on, and no surface a user expects).
-        std::vector<FacePair> bad = find_self_intersections(joined, so);
+        std::vector<FacePair> bad;
+        for (const FacePair& q : find_self_intersections(joined, so))
+          if (out_patch[q.first] >= 0 || out_patch[q.second] >= 0) bad.push_back(q);  // the grid is trusted
+        if (checked_before) {
+          std::unordered_map<FaceName, std::size_t, FaceNameHash> face_named;
+          for (std::size_t t = 0; t < out_tris.size(); ++t) face_named.emplace(names[t], t);
+          for (const auto& [x, y] : last_intersecting) {
+            const auto a = face_named.find(x), b = face_named.find(y);
+            if (a != face_named.end() && b != face_named.end())
+              bad.push_back({std::min(a->second, b->second), std::max(a->second, b->second)});
+          }
+          std::sort(bad.begin(), bad.end());
+          bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
+        }
+        last_checked.clear();
+        for (std::size_t t = 0; t < out_tris.size(); ++t) last_checked.insert(names[t]);
+        last_intersecting.clear();
+        for (const FacePair& q : bad) last_intersecting.push_back({names[q.first], names[q.second]});
+        checked_before = true;
         {
           std::unordered_map<std::uint64_t, std::uint32_t> face_of;  // a -> b: its face
           for (std::size_t t = 0; t < out_tris.size(); ++t)
