@@ -1,5 +1,7 @@
 #include "polyheal/inspect/local_index.h"
 
+#include <boost/container/small_vector.hpp>
+
 #include <algorithm>
 #include <cstdint>
 #include <optional>
@@ -161,45 +163,54 @@ struct LocalIndex::Impl {
     refit(parent);
   }
 
-  /// The fan triangles of face f with their vertex ids.
-  std::vector<Tri> triangles(face_descriptor f) const {
-    std::vector<const Point*> p;
-    std::vector<std::uint64_t> id;
-    for (vertex_descriptor v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) {
-      p.push_back(&mesh.point(v));
-      id.push_back(id_of(v));
-    }
-    std::vector<Tri> t;
-    for (std::size_t k = 1; k + 1 < p.size(); ++k)
-      t.push_back(detail::make_tri<Kernel>(*p[0], *p[k], *p[k + 1], id[0], id[k], id[k + 1]));
+  /// A triangle ready for the pair test: exact, and on InputKernel too when
+  /// its corners are doubles (converted once, not once per pair).
+  struct Prepared {
+    Tri exact;
+    bool doubles;
+    detail::Tri<InputKernel> input;
+  };
+  /// Faces are triangles, or polygons fanned (rare): no heap for the usual case.
+  using Fan = boost::container::small_vector<Prepared, 2>;
+
+  static Prepared prepare(const Point& a, const Point& b, const Point& c, std::uint64_t ia, std::uint64_t ib,
+                          std::uint64_t ic) {
+    Prepared t{detail::make_tri<Kernel>(a, b, c, ia, ib, ic), false, {}};
+    t.doubles = is_double_point(a) && is_double_point(b) && is_double_point(c);
+    if (t.doubles) t.input = {{to_input_point(a), to_input_point(b), to_input_point(c)}, t.exact.id, t.exact.degenerate};
     return t;
   }
 
-  static bool any_pair_intersects(const std::vector<Tri>& a, const std::vector<Tri>& b) {
-    for (const Tri& x : a)
-      for (const Tri& y : b)
+  /// The fan triangles of face f with their vertex ids.
+  Fan triangles(face_descriptor f) const {
+    boost::container::small_vector<vertex_descriptor, 8> v;
+    for (vertex_descriptor u : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) v.push_back(u);
+    Fan t;
+    for (std::size_t k = 1; k + 1 < v.size(); ++k)
+      t.push_back(prepare(mesh.point(v[0]), mesh.point(v[k]), mesh.point(v[k + 1]), id_of(v[0]), id_of(v[k]),
+                          id_of(v[k + 1])));
+    return t;
+  }
+
+  static bool any_pair_intersects(const Fan& a, const Fan& b) {
+    for (const Prepared& x : a)
+      for (const Prepared& y : b)
         if (pair_intersects(x, y)) return true;
     return false;
   }
 
   /// The exact test, on InputKernel when all six points are doubles (the
   /// same answer, much cheaper on the coplanar pairs CAD meshes are full of).
-  static bool pair_intersects(const Tri& x, const Tri& y) {
-    const bool doubles = std::all_of(x.p.begin(), x.p.end(), is_double_point) &&
-                         std::all_of(y.p.begin(), y.p.end(), is_double_point);
-    if (!doubles) return detail::faces_intersect<Kernel>(x, y);
-    auto input = [](const Tri& t) {
-      return detail::Tri<InputKernel>{{to_input_point(t.p[0]), to_input_point(t.p[1]), to_input_point(t.p[2])},
-                                      t.id, t.degenerate};
-    };
-    return detail::faces_intersect<InputKernel>(input(x), input(y));
+  static bool pair_intersects(const Prepared& x, const Prepared& y) {
+    if (x.doubles && y.doubles) return detail::faces_intersect<InputKernel>(x.input, y.input);
+    return detail::faces_intersect<Kernel>(x.exact, y.exact);
   }
 
   /// Indexed faces whose boxes meet b, sorted.
   void candidates_of(const CGAL::Bbox_3& b, std::vector<std::uint32_t>& out) const {
     out.clear();
     if (root == kNone) return;
-    std::vector<std::int32_t> stack{root};
+    boost::container::small_vector<std::int32_t, 64> stack{root};
     while (!stack.empty()) {
       const Node& n = nodes[stack.back()];
       stack.pop_back();
@@ -224,7 +235,7 @@ struct LocalIndex::Impl {
     for (face_descriptor f : faces) {
       const std::uint32_t i = static_cast<std::uint32_t>(f);
       const CGAL::Bbox_3 b = bbox_of(f);
-      const std::vector<Tri> tf = triangles(f);
+      const Fan tf = triangles(f);
       candidates_of(b, candidates);
       for (std::uint32_t j : candidates) {
         if (j == i) continue;
@@ -282,11 +293,11 @@ bool LocalIndex::would_intersect(const std::vector<std::array<vertex_descriptor,
   std::vector<std::uint32_t> skip;
   for (face_descriptor f : replaced) skip.push_back(static_cast<std::uint32_t>(f));
   std::sort(skip.begin(), skip.end());
-  std::vector<std::vector<Tri>> tris;
+  std::vector<Impl::Fan> tris;
   std::vector<CGAL::Bbox_3> boxes;
   for (const auto& t : proposed) {
     const Point &a = mesh.point(t[0]), &b = mesh.point(t[1]), &c = mesh.point(t[2]);
-    tris.push_back({detail::make_tri<Kernel>(a, b, c, impl_->id_of(t[0]), impl_->id_of(t[1]), impl_->id_of(t[2]))});
+    tris.push_back({Impl::prepare(a, b, c, impl_->id_of(t[0]), impl_->id_of(t[1]), impl_->id_of(t[2]))});
     boxes.push_back(a.bbox() + b.bbox() + c.bbox());
   }
   for (std::size_t i = 0; i < tris.size(); ++i)
