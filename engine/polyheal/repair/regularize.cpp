@@ -578,14 +578,18 @@ class Regularizer {
     for (Index m : cluster)
       for (Index u : partners_[m])
         if (root(u) != root(m)) segment(m, u);
-    if (cluster.size() == 1) place_edge_points(cdt, t, i, j, placed);
-    for (Index m : cluster)
-      for (Index u : partners_[m]) {
-        if (root(u) == root(m)) continue;  // the cluster's own edges are constraints already
-        const std::vector<Index>& seg = segment(m, u);
-        if (seg.size() == 1) insert(seg[0]);
-        if (seg.size() == 2) cdt.insert_constraint(insert(seg[0]), insert(seg[1]));
-      }
+    if (cluster.size() == 1) {
+      place_edge_points(cdt, t, i, j, placed);
+      insert_segments(cdt, t, i, j, insert);
+    } else {
+      for (Index m : cluster)
+        for (Index u : partners_[m]) {
+          if (root(u) == root(m)) continue;  // the cluster's own edges are constraints already
+          const std::vector<Index>& seg = segment(m, u);
+          if (seg.size() == 1) insert(seg[0]);
+          if (seg.size() == 2) cdt.insert_constraint(insert(seg[0]), insert(seg[1]));
+        }
+    }
     seconds_intersections += seconds_since(t0);
     // crossings of segments (§3.5 step 2), lifted back onto the plane
     const EPoint A = points_[fv[0]];  // a copy: vertex_id() below grows points_
@@ -634,6 +638,82 @@ class Regularizer {
     }
     for (Index m : cluster) subs_[m] = made;
     r_.sub_triangles += made.size();
+  }
+
+  /// §3.5 step 2 for a triangle t alone in its plane: its segments go in as
+  /// constraints, split first where two of them cross properly (interiors,
+  /// decided exactly in the projection). Such a crossing is the point where
+  /// the planes of t and both partners meet, named by the three faces: the
+  /// three sub-triangulations through it share one exact point, built once
+  /// from the input's doubles, instead of three lifted from the constrained
+  /// triangulation's own crossings and proved equal exactly. Anything less
+  /// generic (segments touching or overlapping) is left to the triangulation.
+  template <class Insert>
+  void insert_segments(CDT& cdt, Index t, int i, int j, Insert& insert) {
+    struct Seg {
+      Index a, b, u;
+      K::Point_2 pa, pb;
+      CGAL::Bbox_2 box;
+      std::vector<Index> on;  // crossings, by id
+    };
+    std::vector<Seg> segs;
+    for (Index u : partners_[t]) {
+      const std::vector<Index>& seg = segment(t, u);
+      if (seg.size() == 1) insert(seg[0]);
+      if (seg.size() != 2 || seg[0] == seg[1]) continue;
+      Seg x{seg[0], seg[1], u, proj(points_[seg[0]], i, j), proj(points_[seg[1]], i, j), {}, {}};
+      x.box = x.pa.bbox() + x.pb.bbox();
+      segs.push_back(std::move(x));
+    }
+    for (std::size_t x = 0; x < segs.size(); ++x)
+      for (std::size_t y = x + 1; y < segs.size(); ++y) {
+        Seg &p = segs[x], &q = segs[y];
+        if (p.a == q.a || p.a == q.b || p.b == q.a || p.b == q.b) continue;
+        if (!CGAL::do_overlap(p.box, q.box)) continue;
+        const CGAL::Orientation o1 = CGAL::orientation(p.pa, p.pb, q.pa), o2 = CGAL::orientation(p.pa, p.pb, q.pb);
+        if (o1 == CGAL::COLLINEAR || o2 == CGAL::COLLINEAR || o1 == o2) continue;
+        const CGAL::Orientation o3 = CGAL::orientation(q.pa, q.pb, p.pa), o4 = CGAL::orientation(q.pa, q.pb, p.pb);
+        if (o3 == CGAL::COLLINEAR || o4 == CGAL::COLLINEAR || o3 == o4) continue;
+        const std::optional<Index> id = triple_point(t, p.u, q.u);
+        if (!id) continue;
+        p.on.push_back(*id);
+        q.on.push_back(*id);
+      }
+    for (Seg& x : segs) {
+      // a to b through its crossings, ordered along the axis it spans most
+      const bool along_x = CGAL::abs(x.pb.x() - x.pa.x()) >= CGAL::abs(x.pb.y() - x.pa.y());
+      auto key = [&](Index id) { return along_x ? points_[id][i] : points_[id][j]; };
+      const bool up = along_x ? x.pa.x() < x.pb.x() : x.pa.y() < x.pb.y();
+      std::sort(x.on.begin(), x.on.end());
+      x.on.erase(std::unique(x.on.begin(), x.on.end()), x.on.end());
+      std::sort(x.on.begin(), x.on.end(), [&](Index m, Index n) { return up ? key(m) < key(n) : key(n) < key(m); });
+      CDT::Vertex_handle from = insert(x.a);
+      for (Index id : x.on) {
+        const CDT::Vertex_handle h = insert(id);
+        if (h != from) cdt.insert_constraint(from, h);
+        from = h;
+      }
+      const CDT::Vertex_handle end = insert(x.b);
+      if (end != from) cdt.insert_constraint(from, end);
+    }
+  }
+
+  /// The point common to the planes of input faces t, u and w (nullopt when
+  /// they do not meet in one point), named by the three faces.
+  std::optional<Index> triple_point(Index t, Index u, Index w) {
+    std::array<Index, 3> key{t, u, w};
+    std::sort(key.begin(), key.end());
+    if (const auto it = triples_.find(key); it != triples_.end()) return it->second;
+    auto plane = [&](Index f) {
+      const FaceView v = soup_.face(f);
+      return K::Plane_3(points_[v[0]], points_[v[1]], points_[v[2]]);
+    };
+    const auto result = CGAL::intersection(plane(t), plane(u), plane(w));
+    const EPoint* p = result ? boost::get<EPoint>(&*result) : nullptr;
+    if (!p) return std::nullopt;
+    const Index id = vertex_id(*p);
+    triples_.emplace(key, id);
+    return id;
   }
 
   void kill(Index t) { pieces_[t].alive = false; }  // an input face: found by faces_with_edge, skipped
@@ -832,6 +912,12 @@ class Regularizer {
   };
   std::unordered_map<std::pair<std::uint64_t, Index>, Index, PairHash> crossings_;  // (edge, face) -> point
   std::unordered_map<std::uint64_t, std::vector<Index>> on_edge_;                   // input edge -> its crossings
+  struct TripleHash {
+    std::size_t operator()(const std::array<Index, 3>& k) const {
+      return std::hash<std::uint64_t>()((std::uint64_t(k[0]) << 42) ^ (std::uint64_t(k[1]) << 21) ^ k[2]);
+    }
+  };
+  std::unordered_map<std::array<Index, 3>, Index, TripleHash> triples_;  // crossing of two segments on a face
   std::unordered_set<std::uint64_t> river_done_;  // intersection-curve edges whose pieces are all classified
   std::vector<char> zero_area_;                                         // per input face (§3.1)
   UnionFind cluster_;                                                   // over coplanar overlaps
