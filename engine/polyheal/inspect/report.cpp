@@ -56,7 +56,8 @@ Report inspect(const Soup& input, const InspectOptions& o) {
     SelfIntersectionOptions si;
     si.parallel = o.parallel;
     si.observer = o.observer;
-    r.self_intersections = find_self_intersections(soup, si);
+    r.self_intersections =
+        o.self_intersections && !weld.merged ? *o.self_intersections : find_self_intersections(soup, si);
     r.seconds_self_intersections = seconds_since(t);
   };
   auto topology_and_shape_pass = [&] { topology_and_shape(soup, weld, o, r); };

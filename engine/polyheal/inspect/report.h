@@ -30,6 +30,11 @@ struct InspectOptions {
   /// for; tetgen_ready() requires it.
   bool tetgen_segments = false;
   bool parallel = true;            // TBB in the self-intersection pass
+  /// Every intersecting pair of the input, sorted, when the caller knows
+  /// them already (found by find_self_intersections on the same soup): not
+  /// searched for again. Ignored when the input has identical points (the
+  /// report's pass runs on the welded soup).
+  const std::vector<FacePair>* self_intersections = nullptr;
   Observer* observer = nullptr;
 };
 

@@ -879,7 +879,9 @@ DeintersectResult remove_self_intersections(const Soup& input, const Deintersect
                                 : "") +
                            "; deintersect needs a manifold mesh (pinch vertices are fine)");
   mark_split_pinches(mesh);
-  const Report in = inspect(input);
+  InspectOptions io;
+  io.self_intersections = o.known_pairs;
+  const Report in = inspect(input, io);
   r.faces = in.faces;
   r.vertices = mesh.number_of_vertices();
   r.degenerate_faces_in = in.degenerate_faces.size();

@@ -75,6 +75,9 @@ struct DeintersectOptions {
   bool swap = true, hammer = true, lift = true;  // which operations to use (the paper's) ...
   bool group = true, pair = true;                // ... and ours: group and pair moves (deintersect.cpp)
   bool certify = true;      // certify the rounded result (callers that certify the written file say false)
+  /// Every intersecting pair of the input, sorted, when the caller has
+  /// found them already (InspectOptions::self_intersections).
+  const std::vector<FacePair>* known_pairs = nullptr;
   Observer* observer = nullptr;
 };
 

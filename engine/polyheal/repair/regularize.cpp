@@ -1255,6 +1255,7 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   if (!rounded.empty()) {
     DeintersectOptions d;
     d.certify = false;
+    d.known_pairs = &rounded;  // every pair: faces without a rounded corner are the exact result's
     try {
       DeintersectResult fixed = remove_self_intersections(result.soup, d);
       // its faces are the input's, in order, when it kept them all (the
