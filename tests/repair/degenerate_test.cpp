@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <random>
 #include <set>
 
 #include "polyheal/inspect/report.h"
@@ -335,36 +334,4 @@ TEST_CASE("degenerate with a fold angle: a spike folded onto its neighbours is c
   CHECK(r.report.collapses >= 1);
   CHECK(topology_of(out) == topology_of(in));
   CHECK(detail::hausdorff_distance(s, r.soup, 1e-7) < 1e-5);  // the bump was 1e-6 high
-}
-
-TEST_CASE("distance: point-triangle distances agree with exact ones in every region", "[repair][distance]") {
-  // The tolerance test and the Hausdorff distance measure in doubles; the
-  // nearest point's region (vertex, edge, face) is chosen by signs of dot
-  // products. Checked against exact rational distances for points around
-  // well-shaped triangles, needles, caps and a zero-area triangle.
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-2.0, 2.0);
-  const std::vector<std::array<Point3d, 3>> triangles{
-      {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}},
-      {{{0, 0, 0}, {1, 0, 0}, {0.5, 1e-3, 0}}},            // a cap
-      {{{0, 0, 0}, {1, 0, 0}, {1, 1e-3, 1e-4}}},           // a needle
-      {{{0.3, -0.2, 0.7}, {-1.1, 0.4, 0.2}, {0.6, 1.3, -0.9}}},
-      {{{0, 0, 0}, {1, 1, 1}, {2, 2, 2}}},                 // zero area: its edges
-  };
-  for (const auto& t : triangles) {
-    const Kernel::Triangle_3 exact(Point(t[0][0], t[0][1], t[0][2]), Point(t[1][0], t[1][1], t[1][2]),
-                                   Point(t[2][0], t[2][1], t[2][2]));
-    for (int k = 0; k < 2000; ++k) {
-      const Point3d p{u(rng), u(rng), u(rng)};
-      const Point q(p[0], p[1], p[2]);
-      const double want = exact.is_degenerate()
-                              ? CGAL::to_double(std::min({CGAL::squared_distance(q, Kernel::Segment_3(exact[0], exact[1])),
-                                                          CGAL::squared_distance(q, Kernel::Segment_3(exact[1], exact[2])),
-                                                          CGAL::squared_distance(q, Kernel::Segment_3(exact[2], exact[0]))}))
-                              : CGAL::to_double(CGAL::squared_distance(q, exact));
-      const double got = detail::squared_distance_to_triangle(p, t[0], t[1], t[2]);
-      INFO("point " << p[0] << " " << p[1] << " " << p[2]);
-      CHECK(std::abs(got - want) <= 1e-12 * (1.0 + want));
-    }
-  }
 }

@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <tuple>
 #include <iterator>
 #include <limits>
 #include <vector>
@@ -93,6 +94,9 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
     }
     return std::sqrt(bound);
   };
+  // How far from a plane a triangle may lie and still count as in it
+  // (planar_bound adds the offset to its bound).
+  const double planar_offset = error_bound / 64;
   double lower = 0.0;
   // The corners' nearest triangles: one query per distinct corner (a
   // vertex is a corner of ~6 triangles), in parallel (the tree is built and
@@ -151,6 +155,9 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
       // 1-Lipschitz bound first (free), then the convexity bound
       if (*std::min_element(piece.d.begin(), piece.d.end()) + edge[k] <= bound + error_bound) continue;
       if (upper_bound(piece) <= bound + error_bound) continue;
+      // A piece over a planar region tessellated by thin triangles (a CAD
+      // fan): no one triangle is near all its corners, but the region is.
+      if (to.planar_bound(piece.p, piece.best, planar_offset, bound + error_bound) <= bound + error_bound) continue;
       const int i = (k + 1) % 3, j = (k + 2) % 3;  // the longest edge runs from corner i to corner j
       Point3d m;
       for (int c = 0; c < 3; ++c) m[c] = 0.5 * (piece.p[i][c] + piece.p[j][c]);
@@ -303,6 +310,130 @@ double SurfaceDistance::ray_distance(const Point3d& origin, const Point3d& direc
 }
 
 bool SurfaceDistance::empty() const { return impl_->triangles.empty(); }
+
+namespace {
+
+struct V2 {
+  double x, y;
+};
+double orient2(const V2& a, const V2& b, const V2& c) { return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x); }
+
+/// A plane's frame: a point of it, its unit normal, two unit axes in it.
+struct Frame {
+  V3 o, n, e1, e2;
+  V2 at(const V3& p) const {
+    const V3 d = p - o;
+    return {dot(d, e1), dot(d, e2)};
+  }
+  double height(const V3& p) const { return dot(p - o, n); }
+};
+
+bool strictly_inside(const V2& p, const std::array<V2, 3>& q) {  // q counter-clockwise
+  return orient2(q[0], q[1], p) > 0 && orient2(q[1], q[2], p) > 0 && orient2(q[2], q[0], p) > 0;
+}
+
+/// Does segment ab meet the open triangle q (counter-clockwise)? a + s (b - a)
+/// clipped against the three open half-planes; a touch at a corner or along
+/// a side is no meeting.
+bool meets_interior(const V2& a, const V2& b, const std::array<V2, 3>& q) {
+  double s0 = 0, s1 = 1;
+  for (int i = 0; i < 3; ++i) {
+    const double fa = orient2(q[i], q[(i + 1) % 3], a), fb = orient2(q[i], q[(i + 1) % 3], b);
+    if (fa <= 0 && fb <= 0) return false;
+    if (fa > 0 && fb > 0) continue;
+    const double s = fa / (fa - fb);
+    if (fa <= 0) s0 = std::max(s0, s);  // enters here
+    else s1 = std::min(s1, s);          // leaves here
+  }
+  return s0 < s1;
+}
+
+}  // namespace
+
+double SurfaceDistance::planar_bound(const Corners& piece, std::size_t t, double max_offset, double limit) const {
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  if (impl_->degenerate[t]) return kNone;
+  const K::Triangle_3& base = impl_->triangles[t];
+  Frame f;
+  f.o = v3(base[0]);
+  const V3 n = cross(v3(base[1]) - f.o, v3(base[2]) - f.o), u = v3(base[1]) - f.o;
+  const double ln = std::sqrt(dot(n, n)), lu = std::sqrt(dot(u, u));
+  if (!(ln > 0) || !(lu > 0)) return kNone;
+  f.n = {n.x / ln, n.y / ln, n.z / ln};
+  f.e1 = {u.x / lu, u.y / lu, u.z / lu};
+  f.e2 = cross(f.n, f.e1);
+  double height = 0;
+  for (const Point3d& c : piece) height = std::max(height, std::abs(f.height({c[0], c[1], c[2]})));
+  if (height + max_offset > limit) return kNone;
+  std::array<V2, 3> q;
+  for (int k = 0; k < 3; ++k) q[k] = f.at({piece[k][0], piece[k][1], piece[k][2]});
+  const double area = orient2(q[0], q[1], q[2]);
+  if (area == 0) return kNone;
+  if (area < 0) std::swap(q[1], q[2]);
+  // Every surface triangle that covers a point of the projection, or has an
+  // edge through it, lies within height + max_offset of the piece (along
+  // the normal): it meets the piece's box grown by that much.
+  Point3d lo = piece[0], hi = piece[0];
+  for (const Point3d& c : piece)
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], c[d]);
+      hi[d] = std::max(hi[d], c[d]);
+    }
+  for (int d = 0; d < 3; ++d) {
+    lo[d] -= height + max_offset;
+    hi[d] += height + max_offset;
+  }
+  struct Side {  // a side of a flat triangle: its ends (sorted), where its third corner lies
+    Point3d a, b;
+    V2 a2, b2;
+    double third;
+  };
+  std::vector<Side> sides;
+  double offset = 0;
+  bool covered = false;
+  const V2 centroid{(q[0].x + q[1].x + q[2].x) / 3, (q[0].y + q[1].y + q[2].y) / 3};
+  for (std::size_t s : triangles_near(lo, hi)) {
+    const K::Triangle_3& tri = impl_->triangles[s];
+    std::array<Point3d, 3> p;
+    std::array<V2, 3> p2;
+    double off = 0;
+    for (int k = 0; k < 3; ++k) {
+      p[k] = {tri[k].x(), tri[k].y(), tri[k].z()};
+      const V3 v = v3(tri[k]);
+      off = std::max(off, std::abs(f.height(v)));
+      p2[k] = f.at(v);
+    }
+    if (off > max_offset) continue;
+    const double a2 = orient2(p2[0], p2[1], p2[2]);
+    if (a2 == 0) continue;  // covers nothing
+    offset = std::max(offset, off);
+    if (!covered) {
+      std::array<V2, 3> ccw = p2;
+      if (a2 < 0) std::swap(ccw[1], ccw[2]);
+      covered = strictly_inside(centroid, ccw);
+    }
+    for (int k = 0; k < 3; ++k) {
+      int i = k, j = (k + 1) % 3;
+      if (p[j] < p[i]) std::swap(i, j);
+      sides.push_back({p[i], p[j], p2[i], p2[j], orient2(p2[i], p2[j], p2[3 - i - j])});
+    }
+  }
+  if (!covered || height + offset > limit) return kNone;
+  // The boundary of U: sides with flat triangles on one side of them only.
+  std::sort(sides.begin(), sides.end(),
+            [](const Side& x, const Side& y) { return std::tie(x.a, x.b) < std::tie(y.a, y.b); });
+  for (std::size_t i = 0; i < sides.size();) {
+    std::size_t j = i;
+    bool left = false, right = false;
+    for (; j < sides.size() && sides[j].a == sides[i].a && sides[j].b == sides[i].b; ++j) {
+      left |= sides[j].third > 0;
+      right |= sides[j].third < 0;
+    }
+    if (!(left && right) && meets_interior(sides[i].a2, sides[i].b2, q)) return kNone;
+    i = j;
+  }
+  return height + offset;
+}
 
 std::pair<double, std::size_t> SurfaceDistance::nearest(const Point3d& p) const {
   const K::Point_3 q = point(p);

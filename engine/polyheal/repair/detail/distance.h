@@ -8,6 +8,7 @@
 
 #include <array>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -46,6 +47,22 @@ class SurfaceDistance {
   /// when it hits none (the local thickness of Yamakawa & Shimada §5.2).
   double ray_distance(const Point3d& origin, const Point3d& direction, const std::vector<std::size_t>& skip) const;
   bool empty() const;
+
+  /// An upper bound on the distance to the surface over the whole triangle
+  /// `piece`, from the plane P of surface triangle `t`; +infinity where it
+  /// cannot be shown. Let U be the union of the surface triangles that meet
+  /// the piece's neighbourhood and lie within `max_offset` of P, projected
+  /// onto P. When the projection of the piece lies in U, every point x of
+  /// the piece is within |h(x)| + offset of the surface (h: height over P;
+  /// offset: the largest of those triangles' corners), a convex function,
+  /// so the bound is its largest value at a corner. The projection lies in
+  /// U when no boundary edge of U (an edge with those triangles on one side
+  /// only) meets its open interior and its centroid lies inside a triangle
+  /// of U. This bounds a piece of a planar region tessellated by long thin
+  /// triangles (CAD fans), where no single triangle is near all its corners.
+  /// Gives up (+infinity) as soon as the bound is seen to exceed `limit`.
+  double planar_bound(const std::array<Point3d, 3>& piece, std::size_t t, double max_offset,
+                      double limit = std::numeric_limits<double>::infinity()) const;
 
  private:
   struct Impl;

@@ -1,0 +1,166 @@
+// polyheal distances (repair/detail/distance.h): the point-triangle distance
+// every tolerance test and Hausdorff measurement is built on, and the bounds
+// that let the bounded-error Hausdorff distance stop bisecting.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "polyheal/mesh/mesh.h"
+#include "polyheal/repair/detail/distance.h"
+#include "support/builders.h"
+
+using namespace polyheal;
+
+namespace {
+
+/// The rectangle [x0, x1] x [y0, y1] at height z as CAD tessellators leave it:
+/// a fan from the top-left corner to n points along the bottom side and a
+/// fan from the bottom-right corner to n points along the top side, so
+/// nearly every triangle is a needle (n = 200 on a 4 x 1 cell: 0.02 wide,
+/// up to 4 long).
+void add_fan_cell(Soup& s, double x0, double x1, double y0, double y1, double z, int n) {
+  const Index base = static_cast<Index>(s.points.size());
+  for (int i = 0; i <= n; ++i) s.points.push_back({x0 + (x1 - x0) * i / n, y0, z});  // bottom: base + i
+  for (int i = 0; i <= n; ++i) s.points.push_back({x0 + (x1 - x0) * i / n, y1, z});  // top: base + n + 1 + i
+  const Index top0 = base + static_cast<Index>(n) + 1, bottom_n = base + static_cast<Index>(n);
+  for (int i = 0; i < n; ++i) s.add_triangle(top0, base + Index(i), base + Index(i) + 1);
+  for (int i = 0; i < n; ++i) s.add_triangle(bottom_n, top0 + Index(i) + 1, top0 + Index(i));
+}
+
+/// A 10 x 2 plate at z = 0 with the square hole [4, 6] x [0.5, 1.5]: the
+/// eight cells of a 3 x 3 grid around it, each tessellated by add_fan_cell.
+/// Neighbouring cells meet along sides made of the same points (welded).
+Soup plate_with_hole(int n) {
+  Soup s;
+  const double xs[4] = {0, 4, 6, 10}, ys[4] = {0, 0.5, 1.5, 2};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (i != 1 || j != 1) add_fan_cell(s, xs[i], xs[i + 1], ys[j], ys[j + 1], 0.0, n);
+  return s;
+}
+
+/// The same plate, two triangles per cell; filled: two triangles in all,
+/// over the hole too (their centroids lie on the plate, not over the hole).
+Soup coarse_plate(bool filled) {
+  Soup s;
+  if (filled) return test::soup({{0, 0, 0}, {10, 0, 0}, {10, 2, 0}, {0, 2, 0}}, {{0, 1, 2}, {0, 2, 3}});
+  const double xs[4] = {0, 4, 6, 10}, ys[4] = {0, 0.5, 1.5, 2};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      if (i == 1 && j == 1) continue;
+      const Index b = static_cast<Index>(s.points.size());
+      s.points.push_back({xs[i], ys[j], 0});
+      s.points.push_back({xs[i + 1], ys[j], 0});
+      s.points.push_back({xs[i + 1], ys[j + 1], 0});
+      s.points.push_back({xs[i], ys[j + 1], 0});
+      s.add_triangle(b, b + 1, b + 2);
+      s.add_triangle(b, b + 2, b + 3);
+    }
+  return s;
+}
+
+/// The surface triangle nearest p (planar_bound takes its plane).
+std::size_t nearest_triangle(const detail::SurfaceDistance& d, const Point3d& p) { return d.nearest(p).second; }
+
+}  // namespace
+
+TEST_CASE("distance: point-triangle distances agree with exact ones in every region", "[repair][distance]") {
+  // The tolerance test and the Hausdorff distance measure in doubles; the
+  // nearest point's region (vertex, edge, face) is chosen by signs of dot
+  // products. Checked against exact rational distances for points around
+  // well-shaped triangles, needles, caps and a zero-area triangle.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  const std::vector<std::array<Point3d, 3>> triangles{
+      {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}},
+      {{{0, 0, 0}, {1, 0, 0}, {0.5, 1e-3, 0}}},            // a cap
+      {{{0, 0, 0}, {1, 0, 0}, {1, 1e-3, 1e-4}}},           // a needle
+      {{{0.3, -0.2, 0.7}, {-1.1, 0.4, 0.2}, {0.6, 1.3, -0.9}}},
+      {{{0, 0, 0}, {1, 1, 1}, {2, 2, 2}}},                 // zero area: its edges
+  };
+  for (const auto& t : triangles) {
+    const Kernel::Triangle_3 exact(Point(t[0][0], t[0][1], t[0][2]), Point(t[1][0], t[1][1], t[1][2]),
+                                   Point(t[2][0], t[2][1], t[2][2]));
+    for (int k = 0; k < 2000; ++k) {
+      const Point3d p{u(rng), u(rng), u(rng)};
+      const Point q(p[0], p[1], p[2]);
+      const double want = exact.is_degenerate()
+                              ? CGAL::to_double(std::min({CGAL::squared_distance(q, Kernel::Segment_3(exact[0], exact[1])),
+                                                          CGAL::squared_distance(q, Kernel::Segment_3(exact[1], exact[2])),
+                                                          CGAL::squared_distance(q, Kernel::Segment_3(exact[2], exact[0]))}))
+                              : CGAL::to_double(CGAL::squared_distance(q, exact));
+      const double got = detail::squared_distance_to_triangle(p, t[0], t[1], t[2]);
+      INFO("point " << p[0] << " " << p[1] << " " << p[2]);
+      CHECK(std::abs(got - want) <= 1e-12 * (1.0 + want));
+    }
+  }
+}
+
+TEST_CASE("distance: a piece over a planar fan region is bounded by its height, not by one needle",
+          "[repair][distance]") {
+  // One row per configuration: a triangle above the plate with the hole,
+  // whether its projection lies in the plate (then the bound is its largest
+  // corner height plus the coplanarity offset), and why.
+  const Soup plate = plate_with_hole(200);
+  const detail::SurfaceDistance d(plate);
+  const double offset = 1e-9;
+  struct Row {
+    std::array<Point3d, 3> piece;
+    double bound;  // expected; infinity: must not be bounded
+    const char* why;
+  };
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  const Row rows[] = {
+      {{{{0.5, 0.2, 0}, {3.5, 0.3, 0}, {2, 1.8, 0}}}, 0, "in the plate, over some 400 needles"},
+      {{{{0.5, 0.2, 0.01}, {3.5, 0.3, 0.02}, {2, 1.8, 0.03}}}, 0.03, "the same, lifted: its highest corner"},
+      {{{{0.5, 0.1, -0.01}, {9.5, 0.2, -0.01}, {5, 0.45, -0.01}}}, 0.01, "across the three cells below the hole, under the plate"},
+      {{{{0, 0, 0}, {4, 0, 0}, {0, 2, 0}}}, 0, "corners on the plate's vertices, sides along its rim"},
+      {{{{6, 0.5, 0}, {10, 0.5, 0}, {6, 1.5, 0}}}, 0, "a side along the hole's rim, from outside"},
+      {{{{3.5, 0.2, 0}, {7, 0.2, 0}, {5, 1.9, 0}}}, kNone, "over part of the hole"},
+      {{{{2, 0.2, 0}, {5, 0.2, 0}, {2, 1.8, 0}}}, kNone, "over a corner of the hole, its centroid on the plate"},
+      {{{{1, 0.05, 0}, {9, 0.05, 0}, {5, 1.99, 0}}}, kNone, "over the whole hole (its rim inside the piece)"},
+      {{{{-1, 0.5, 0}, {2, 0.5, 0}, {1, 1.5, 0}}}, kNone, "past the plate's rim"},
+      {{{{4.5, 0.6, 0}, {5.5, 0.6, 0}, {5, 1.4, 0}}}, kNone, "inside the hole"},
+  };
+  for (const Row& row : rows) {
+    INFO(row.why);
+    // The needle nearest the first corner gives the plane (any of the plate's would).
+    const std::size_t t = nearest_triangle(d, {row.piece[0][0] + 1e-3, row.piece[0][1] + 1e-3, 0});
+    const double got = d.planar_bound(row.piece, t, offset);
+    if (row.bound == kNone) {
+      CHECK(got == kNone);
+    } else {
+      CHECK(got <= row.bound + offset + 1e-12);
+      CHECK(got >= row.bound - 1e-12);
+      // A true upper bound: no point of the piece is farther from the plate.
+      for (double a = 0; a <= 1; a += 0.125)
+        for (double b = 0; a + b <= 1; b += 0.125) {
+          Point3d p;
+          for (int k = 0; k < 3; ++k)
+            p[k] = row.piece[0][k] + a * (row.piece[1][k] - row.piece[0][k]) + b * (row.piece[2][k] - row.piece[0][k]);
+          CHECK(std::sqrt(d.squared_distance(p)) <= got + 1e-12);
+        }
+    }
+  }
+  // A limit below the bound gives up.
+  CHECK(d.planar_bound(rows[1].piece, nearest_triangle(d, {0.501, 0.201, 0}), offset, 0.02) == kNone);
+}
+
+TEST_CASE("distance: Hausdorff between fan and coarse tessellations of a plate sees the hole", "[repair][distance]") {
+  // The same plate twice (needle fans, two triangles per cell): distance 0.
+  // With the hole filled in the coarse one: 0.5, the distance from the
+  // hole's centre to its rim, which a bound claiming that the two big
+  // triangles lie over the fan plate would hide.
+  const Soup fans = plate_with_hole(200);
+  const double error = 1e-3;
+  const std::array<double, 2> same = detail::one_sided_distances(fans, coarse_plate(false), error);
+  CHECK(same[0] <= 1e-12);
+  CHECK(same[1] <= 1e-12);
+  const std::array<double, 2> filled = detail::one_sided_distances(fans, coarse_plate(true), error);
+  CHECK(filled[0] <= 1e-12);                // every point of the fans is on the filled plate
+  CHECK(filled[1] >= 0.5 - error - 1e-12);  // the filled hole's centre is 0.5 from the fans
+  CHECK(filled[1] <= 0.5 + 1e-12);
+}
