@@ -164,3 +164,49 @@ TEST_CASE("distance: Hausdorff between fan and coarse tessellations of a plate s
   CHECK(filled[1] >= 0.5 - error - 1e-12);  // the filled hole's centre is 0.5 from the fans
   CHECK(filled[1] <= 0.5 + 1e-12);
 }
+
+TEST_CASE("distance: nearest-triangle and box queries agree with a search of every triangle", "[repair][distance]") {
+  // The index splits long triangles into pieces (the needle fans of the
+  // plate, up to 4 long beside 0.02-wide ones) and prunes by box distance;
+  // neither may change an answer. Random well-shaped triangles are mixed in.
+  Soup s = plate_with_hole(50);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 11.0), small(-0.5, 0.5);
+  for (int k = 0; k < 300; ++k) {
+    const Point3d c{u(rng), u(rng) / 5, small(rng)};
+    const Index b = static_cast<Index>(s.points.size());
+    for (int j = 0; j < 3; ++j) s.points.push_back({c[0] + small(rng), c[1] + small(rng), c[2] + small(rng)});
+    s.add_triangle(b, b + 1, b + 2);
+  }
+  const detail::SurfaceDistance d(s);
+  auto corner = [&](std::size_t f, int k) { return s.points[s.face(f)[k]]; };
+  for (int k = 0; k < 3000; ++k) {
+    const Point3d p{u(rng), u(rng) / 5, small(rng)};
+    double want = std::numeric_limits<double>::infinity();
+    for (std::size_t f = 0; f < s.face_count(); ++f)
+      want = std::min(want, detail::squared_distance_to_triangle(p, corner(f, 0), corner(f, 1), corner(f, 2)));
+    const auto [got, t] = d.nearest(p);
+    INFO("point " << p[0] << " " << p[1] << " " << p[2]);
+    // (the index keeps corners in a canonical order: the last bit may differ)
+    const double slack = 1e-12 * (1 + want);
+    CHECK(std::abs(got - want) <= slack);
+    CHECK(std::abs(detail::squared_distance_to_triangle(p, corner(t, 0), corner(t, 1), corner(t, 2)) - want) <= slack);
+    CHECK(std::abs(d.nearest(p, std::size_t(k) % s.face_count()).first - want) <= slack);  // any hint
+  }
+  for (int k = 0; k < 300; ++k) {
+    const Point3d c{u(rng), u(rng) / 5, small(rng)};
+    const double r = 0.05 + 0.2 * (small(rng) + 0.5);
+    const Point3d lo{c[0] - r, c[1] - r, c[2] - r}, hi{c[0] + r, c[1] + r, c[2] + r};
+    const std::vector<std::size_t> got = d.triangles_near(lo, hi);
+    const CGAL::Bbox_3 box(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+    for (std::size_t f = 0; f < s.face_count(); ++f) {
+      const InputKernel::Point_3 a(corner(f, 0)[0], corner(f, 0)[1], corner(f, 0)[2]),
+          b(corner(f, 1)[0], corner(f, 1)[1], corner(f, 1)[2]), e(corner(f, 2)[0], corner(f, 2)[1], corner(f, 2)[2]);
+      const bool listed = std::binary_search(got.begin(), got.end(), f);
+      INFO("box around " << c[0] << " " << c[1] << " " << c[2] << ", triangle " << f);
+      if (CGAL::do_intersect(box, InputKernel::Triangle_3(a, b, e))) CHECK(listed);  // it meets the box
+      if (!CGAL::do_overlap(box, a.bbox() + b.bbox() + e.bbox())) CHECK(!listed);  // its box misses it
+    }
+    CHECK(std::is_sorted(got.begin(), got.end()));
+  }
+}
