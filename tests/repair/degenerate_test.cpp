@@ -205,16 +205,20 @@ TEST_CASE("degenerate: CAD tessellations from the corpus, certified on the file 
     repair_fixture_as_written(name);
 }
 
-// trimesh's fixed_top and ADIS16480 (CAD exports, dense needle fans) each
-// have a flat face with a corner of about 4 and 3 degrees between creases,
-// whose tip's short edge is 3-4 times the tolerance: no collapse of it stays
-// within the tolerance, and halving cuts leave a band whose triangle has the
-// tip's angle again. Each ended with that one needle before cut_wedge().
+// trimesh's fixed_top (a CAD export, dense needle fans) has a flat face with
+// a corner of about 4 degrees between creases, whose tip's short edge is 3-4
+// times the tolerance: no collapse of it stays within the tolerance, and
+// halving cuts leave a band whose triangle has the tip's angle again. It
+// ended with that one needle before cut_wedge().
 TEST_CASE("degenerate: a CAD face's sharp corner goes by a series of cuts (fixed_top)", "[repair][corpus]") {
   CHECK(repair_fixture_as_written("corpus/trimesh__fixed_top.ply").report.wedge_tips >= 1);
 }
-TEST_CASE("degenerate: a CAD face's sharp corner goes by a series of cuts (ADIS16480)", "[repair][corpus]") {
-  CHECK(repair_fixture_as_written("corpus/trimesh__ADIS16480.STL").report.wedge_tips >= 1);
+// ADIS16480 (7.4k faces, 3640 needles in dense CAD fans) ended with one such
+// wedge tip too; since the decimator's choices no longer depend on which
+// exact tests ran before (approx_point3d), its path reaches no stuck tip.
+// Certified on the file as written either way.
+TEST_CASE("degenerate: dense CAD needle fans are certified on the file as written (ADIS16480)", "[repair][corpus]") {
+  repair_fixture_as_written("corpus/trimesh__ADIS16480.STL");
 }
 
 TEST_CASE("degenerate: collapses never join two pinch copies' edges (the file's topology stays)",

@@ -223,4 +223,6 @@ double nearest_double(const Kernel::FT& x) {
 
 Point3d nearest_point3d(const Point& p) { return {nearest_double(p.x()), nearest_double(p.y()), nearest_double(p.z())}; }
 
+Point3d approx_point3d(const Point& p) { return nearest_point3d(p); }
+
 }  // namespace polyheal

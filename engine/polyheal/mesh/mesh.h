@@ -72,12 +72,14 @@ inline std::uint32_t vertex_identity(const std::optional<VertexIdentityMap>& map
   return i == kOwnIdentity ? static_cast<std::uint32_t>(v) : i;
 }
 
-/// p's coordinates as doubles, each within the lazy kernel's interval
-/// approximation (a measurement or a hint, not a certified rounding: that is
-/// mesh_to_soup's nearest-double rounding).
-inline Point3d approx_point3d(const Point& p) {
-  return {CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())};
-}
+/// p's coordinates as doubles for measurements and choices (shape quality,
+/// distances, directions): the nearest double to each exact coordinate.
+/// Not CGAL::to_double, whose answer on a lazy number depends on whether its
+/// exact value was computed before (the interval is tightened then): a
+/// repair's choices would depend on which exact tests happened to run, and
+/// a faster filter would change its output. The exact value is computed
+/// once per point and kept by the lazy kernel.
+Point3d approx_point3d(const Point& p);
 
 using FaceOriginMap = Mesh::Property_map<face_descriptor, std::int64_t>;
 

@@ -1,7 +1,11 @@
 #include "polyheal/inspect/detail/triangle_pair.h"
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <variant>
 
+#include <CGAL/Interval_nt.h>
 #include <CGAL/intersections.h>
 
 namespace polyheal::detail {
@@ -48,6 +52,167 @@ bool edge_meets_triangle(const typename K::Point_3& p, const typename K::Point_3
   return CGAL::do_intersect(typename K::Segment_3(p, q), typename K::Triangle_3(t.p[0], t.p[1], t.p[2]));
 }
 
+/// A cheap proof that two triangles of the exact kernel meet at most in
+/// the vertices they share, before the exact test. Split points are lazy
+/// rationals: where two triangles are nearly (or exactly but obliquely)
+/// coplanar, as neighbours in a fan of needles are, no interval filter
+/// decides CGAL's orientation tests and they fall back to rational
+/// arithmetic (most of degenerate's decimation time on CAD fans). Such
+/// neighbours are usually well apart within their plane, though, so a plane
+/// chosen in doubles that separates them is found, and the separation is
+/// then checked with interval arithmetic on the points' enclosures: a
+/// certificate, exact whenever it answers. Where it cannot, the exact test
+/// runs as before.
+///   no shared vertex   a plane with one triangle strictly on each side;
+///   one, v             a plane through v with the other corners of one
+///                      triangle strictly on one side and of the other on
+///                      the other (they meet only in v);
+///   an edge pq         a plane containing the line pq with the opposite
+///                      corners strictly on opposite sides (no fold-over).
+class Separation {
+ public:
+  using I = CGAL::Interval_nt<false>;
+  struct IV {
+    I x, y, z;
+  };
+  struct DV {
+    double x, y, z;
+  };
+
+  Separation(const Tri<Kernel>& a, const Tri<Kernel>& b) {
+    for (int k = 0; k < 3; ++k) {
+      const auto& pa = CGAL::approx(a.p[k]);
+      const auto& pb = CGAL::approx(b.p[k]);
+      ia_[k] = {pa.x(), pa.y(), pa.z()};
+      ib_[k] = {pb.x(), pb.y(), pb.z()};
+      da_[k] = mid(ia_[k]);
+      db_[k] = mid(ib_[k]);
+    }
+    normal_ = unit(add(normal_of(da_), oriented(normal_of(db_), normal_of(da_))));
+  }
+
+  /// shared = 0, 1 or 2 vertices, at a's corners ia[...] and b's ib[...].
+  bool apart(int shared, const int ia[3], const int ib[3]) const {
+    if (!(dot(normal_, normal_) > 0)) return false;
+    switch (shared) {
+      case 0: return apart_disjoint();
+      case 1: return apart_at_vertex(ia[0], ib[0]);
+      case 2: return apart_at_edge(ia[0], ia[1], 3 - ia[0] - ia[1], 3 - ib[0] - ib[1]);
+      default: return false;
+    }
+  }
+
+ private:
+  static double mid(const I& i) { return 0.5 * i.inf() + 0.5 * i.sup(); }
+  static DV mid(const IV& p) { return {mid(p.x), mid(p.y), mid(p.z)}; }
+  static DV sub(const DV& a, const DV& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+  static DV add(const DV& a, const DV& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+  static double dot(const DV& a, const DV& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+  static DV cross(const DV& a, const DV& b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+  }
+  static DV unit(const DV& a) {
+    const double l = std::sqrt(dot(a, a));
+    return l > 0 ? DV{a.x / l, a.y / l, a.z / l} : DV{0, 0, 0};
+  }
+  static DV normal_of(const std::array<DV, 3>& t) { return unit(cross(sub(t[1], t[0]), sub(t[2], t[0]))); }
+  static DV oriented(const DV& n, const DV& like) { return dot(n, like) < 0 ? DV{-n.x, -n.y, -n.z} : n; }
+  /// The sign of m . (x - o), certain (+1, -1) or not (0).
+  static int side(const IV& m, const IV& o, const IV& x) {
+    const I s = m.x * (x.x - o.x) + m.y * (x.y - o.y) + m.z * (x.z - o.z);
+    return s.inf() > 0 ? 1 : (s.sup() < 0 ? -1 : 0);
+  }
+  static IV exact(const DV& d) { return {I(d.x), I(d.y), I(d.z)}; }
+
+  bool apart_disjoint() const {
+    // Candidate normals: both planes and each side extruded along the normal.
+    std::array<DV, 8> ms{normal_of(da_), normal_of(db_)};
+    for (int k = 0; k < 3; ++k) {
+      ms[2 + k] = cross(sub(da_[(k + 1) % 3], da_[k]), normal_);
+      ms[5 + k] = cross(sub(db_[(k + 1) % 3], db_[k]), normal_);
+    }
+    for (const DV& m : ms) {
+      double lo_a = INFINITY, hi_a = -INFINITY, lo_b = INFINITY, hi_b = -INFINITY;
+      for (int k = 0; k < 3; ++k) {
+        const double sa = dot(m, da_[k]), sb = dot(m, db_[k]);
+        lo_a = std::min(lo_a, sa), hi_a = std::max(hi_a, sa);
+        lo_b = std::min(lo_b, sb), hi_b = std::max(hi_b, sb);
+      }
+      double c;  // the plane m . x = c midway in the gap
+      if (hi_a < lo_b) c = 0.5 * hi_a + 0.5 * lo_b;
+      else if (hi_b < lo_a) c = 0.5 * hi_b + 0.5 * lo_a;
+      else continue;
+      // a point o of the plane: c along m from the origin (exact doubles)
+      const double mm = dot(m, m);
+      if (!(mm > 0)) continue;
+      const IV om = exact(m);
+      const I t = I(c) / I(mm);
+      const IV o{om.x * t, om.y * t, om.z * t};
+      // o is an interval enclosure of a point of a plane parallel to m . x = c:
+      // the certificate needs all six signs certain, whatever point of it
+      int sa = 0, sb = 0;
+      bool ok = true;
+      for (int k = 0; k < 3 && ok; ++k) {
+        const int x = side(om, o, ia_[k]), y = side(om, o, ib_[k]);
+        ok = x != 0 && y != 0 && (sa == 0 || x == sa) && (sb == 0 || y == sb);
+        sa = x, sb = y;
+      }
+      if (ok && sa == -sb) return true;
+    }
+    return false;
+  }
+
+  bool apart_at_vertex(int va, int vb) const {
+    // In the plane across the normal, the directions from v to the other
+    // corners of a, and from the other corners of b to v, must fit in an
+    // open half-plane: m points to its middle.
+    const DV e1 = unit(cross(normal_, std::abs(normal_.x) < 0.9 ? DV{1, 0, 0} : DV{0, 1, 0}));
+    const DV e2 = cross(normal_, e1);
+    std::array<double, 4> angle;
+    int n = 0;
+    for (int k = 0; k < 3; ++k) {
+      if (k != va) {
+        const DV d = sub(da_[k], da_[va]);
+        angle[n++] = std::atan2(dot(d, e2), dot(d, e1));
+      }
+    }
+    for (int k = 0; k < 3; ++k) {
+      if (k != vb) {
+        const DV d = sub(db_[vb], db_[k]);
+        angle[n++] = std::atan2(dot(d, e2), dot(d, e1));
+      }
+    }
+    std::sort(angle.begin(), angle.end());
+    double gap = angle[0] + 2 * M_PI - angle[3], after = angle[3];  // the largest gap, after `after`
+    for (int k = 0; k < 3; ++k)
+      if (angle[k + 1] - angle[k] > gap) gap = angle[k + 1] - angle[k], after = angle[k];
+    if (gap <= M_PI) return false;
+    const double middle = after + 0.5 * gap + M_PI;  // opposite the gap's middle
+    const DV m = add(DV{e1.x * std::cos(middle), e1.y * std::cos(middle), e1.z * std::cos(middle)},
+                     DV{e2.x * std::sin(middle), e2.y * std::sin(middle), e2.z * std::sin(middle)});
+    const IV om = exact(m);
+    for (int k = 0; k < 3; ++k) {
+      if (k != va && side(om, ia_[va], ia_[k]) != 1) return false;
+      if (k != vb && side(om, ib_[vb], ib_[k]) != -1) return false;
+    }
+    return true;
+  }
+
+  bool apart_at_edge(int p, int q, int r, int s) const {
+    // m = (q - p) x normal, in intervals: exactly perpendicular to pq, so
+    // the plane through p with normal m contains the line pq.
+    const IV d{ia_[q].x - ia_[p].x, ia_[q].y - ia_[p].y, ia_[q].z - ia_[p].z};
+    const IV n = exact(normal_);
+    const IV m{d.y * n.z - d.z * n.y, d.z * n.x - d.x * n.z, d.x * n.y - d.y * n.x};
+    const int x = side(m, ia_[p], ia_[r]), y = side(m, ia_[p], ib_[s]);
+    return x != 0 && y == -x;
+  }
+
+  std::array<IV, 3> ia_, ib_;
+  std::array<DV, 3> da_, db_;
+  DV normal_;
+};
+
 }  // namespace
 
 template <class K>
@@ -64,6 +229,10 @@ bool faces_intersect(const Tri<K>& a, const Tri<K>& b) {
   if (a.degenerate || b.degenerate) {
     if (shared > 0) return false;  // see the header: reported as degenerate instead
     return primitives_intersect<K>(primitive(a), primitive(b));
+  }
+  if constexpr (std::is_same_v<K, Kernel>) {
+    CGAL::Protect_FPU_rounding<true> upward;  // the intervals' arithmetic
+    if (shared < 3 && Separation(a, b).apart(shared, ia, ib)) return false;
   }
   using Triangle = typename K::Triangle_3;
   switch (shared) {

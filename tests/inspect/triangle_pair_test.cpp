@@ -1,0 +1,148 @@
+// The one exact triangle-pair test (inspect/detail/triangle_pair.h), on the
+// exact kernel's lazy rational points: its answers against CGAL's exact
+// predicates applied directly, on the configurations where its cheap
+// separation certificate runs instead of them — nearly or exactly but
+// obliquely coplanar fans of needles, as slicing leaves them.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include <CGAL/intersections.h>
+
+#include "polyheal/inspect/detail/triangle_pair.h"
+#include "polyheal/mesh/mesh.h"
+
+using namespace polyheal;
+
+namespace {
+
+using FT = Kernel::FT;
+using Tri = detail::Tri<Kernel>;
+
+/// Points of the oblique plane through a, b, c (doubles) at rational
+/// parameters (s, t) / 9973, lifted along the plane's normal by h / 9973:
+/// exact rationals that no double represents, exactly coplanar when h = 0.
+struct Plane {
+  Point a, b, c;
+  Kernel::Vector_3 n;
+  Point at(double s, double t, double h) const {
+    const FT k(9973);
+    const FT fs(std::round(s * 1e6)), ft(std::round(t * 1e6)), fh(std::round(h * 1e6));
+    return a + (b - a) * (fs / (k * FT(1e6))) + (c - a) * (ft / (k * FT(1e6))) + n * (fh / (k * FT(1e6)));
+  }
+};
+
+/// An oblique plane through three random points near the origin.
+Plane random_plane(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Plane pl;
+  pl.a = Point(u(rng), u(rng), u(rng));
+  pl.b = Point(u(rng) + 2, u(rng), u(rng));
+  pl.c = Point(u(rng), u(rng) + 2, u(rng));
+  pl.n = CGAL::cross_product(pl.b - pl.a, pl.c - pl.a);
+  return pl;
+}
+
+/// CGAL's predicates, applied directly, in the pair test's semantics.
+bool truth(const Tri& x, const Tri& y, int shared) {
+  using T = Kernel::Triangle_3;
+  using S = Kernel::Segment_3;
+  const T tx(x.p[0], x.p[1], x.p[2]), ty(y.p[0], y.p[1], y.p[2]);
+  switch (shared) {
+    case 0: return CGAL::do_intersect(tx, ty);
+    case 1:  // x.p[0] == y.p[0]
+      return CGAL::do_intersect(S(x.p[1], x.p[2]), ty) || CGAL::do_intersect(S(y.p[1], y.p[2]), tx);
+    default:  // the edge x.p[0] x.p[1] is y's edge; x.p[2], y.p[2] opposite
+      return CGAL::coplanar(x.p[0], x.p[1], x.p[2], y.p[2]) &&
+             CGAL::coplanar_orientation(x.p[0], x.p[1], x.p[2], y.p[2]) == CGAL::POSITIVE;
+  }
+}
+
+}  // namespace
+
+TEST_CASE("triangle_pair: nearly coplanar rational fans are decided as CGAL's exact predicates decide them",
+          "[inspect]") {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), angle(0.0, 2 * M_PI), radius(0.2, 3.0);
+  // Heights over the plane, one per row: exactly in it; an ulp-scale lift
+  // (no interval filter decides those); well out of it.
+  const double heights[] = {0.0, 1e-12, 1e-3};
+  std::size_t intersecting[3] = {0, 0, 0}, apart[3] = {0, 0, 0};
+  for (int trial = 0; trial < 900; ++trial) {
+    const Plane pl = random_plane(rng);
+    const double h = heights[(trial / 3) % 3];
+    const double s0 = u(rng), t0 = u(rng);
+    // a needle fan around (s0, t0): corners at nearby angles, sometimes
+    // overlapping, lifted by +-h
+    auto corner = [&](double th, double r) {
+      return pl.at(s0 + r * std::cos(th), t0 + r * std::sin(th), h * u(rng));
+    };
+    const double th = angle(rng), w = 0.02 + 0.05 * (u(rng) + 1), gap = 0.03 * u(rng);  // gap < 0: overlap
+    const Point v = pl.at(s0, t0, 0);
+    const Point a1 = corner(th, radius(rng)), a2 = corner(th + w, radius(rng));
+    const Point b1 = corner(th + w + gap, radius(rng)), b2 = corner(th + 2 * w + gap, radius(rng));
+    const std::uint64_t V = 1, A1 = 2, A2 = 3, B1 = 4, B2 = 5;
+    const int shared = trial % 3;
+    Tri x, y;
+    if (shared == 0) {  // two needles of neighbouring fans: b's apex moved off v
+      const Point w0 = pl.at(s0 + 0.05 * u(rng), t0 + 0.05 * u(rng), h * u(rng));
+      x = detail::make_tri<Kernel>(v, a1, a2, V, A1, A2);
+      y = detail::make_tri<Kernel>(w0, b1, b2, 6, B1, B2);
+    } else if (shared == 1) {  // two needles of one fan
+      x = detail::make_tri<Kernel>(v, a1, a2, V, A1, A2);
+      y = detail::make_tri<Kernel>(v, b1, b2, V, B1, B2);
+    } else {  // two needles across the edge v a2; b1 beside a2 (fold when on a1's side)
+      x = detail::make_tri<Kernel>(v, a2, a1, V, A2, A1);
+      y = detail::make_tri<Kernel>(v, a2, b1, V, A2, B1);
+    }
+    if (x.degenerate || y.degenerate) continue;
+    const bool want = truth(x, y, shared);
+    INFO("trial " << trial << ", shared " << shared << ", height " << h);
+    CHECK(detail::faces_intersect<Kernel>(x, y) == want);
+    CHECK(detail::faces_intersect<Kernel>(y, x) == want);
+    ++(want ? intersecting : apart)[shared];
+  }
+  // both answers occur in every configuration (the table is not one-sided)
+  for (int k = 0; k < 3; ++k) {
+    CHECK(intersecting[k] > 10);
+    CHECK(apart[k] > 10);
+  }
+}
+
+TEST_CASE("triangle_pair: needles of one fan whose sides from the apex run along one line", "[inspect]") {
+  // Where a side of each needle leaves the shared apex v along the same
+  // line, no plane through v has the two strictly apart: the separation
+  // cannot be shown, and the exact test must answer. One row per case,
+  // each in random oblique planes, with rational points.
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Plane pl = random_plane(rng);
+    const double s0 = u(rng), t0 = u(rng), th = 3 * u(rng), w = 0.05;
+    const Point v = pl.at(s0, t0, 0);
+    const Point a1 = pl.at(s0 + 2 * std::cos(th), t0 + 2 * std::sin(th), 0);
+    const Point a2 = pl.at(s0 + 2 * std::cos(th + w), t0 + 2 * std::sin(th + w), 0);
+    const Point ahead = v + (a2 - v) * (FT(1) / FT(3));   // on the side v a2
+    const Point behind = v - (a2 - v) * (FT(1) / FT(3));  // on its line, beyond v
+    const Point out = pl.at(s0 + 2 * std::cos(th + 2 * w), t0 + 2 * std::sin(th + 2 * w), 0);
+    const Point back = pl.at(s0 - 2 * std::cos(th + 2 * w), t0 - 2 * std::sin(th + 2 * w), 0);
+    const Tri x = detail::make_tri<Kernel>(v, a1, a2, 1, 2, 3);
+    struct Row {
+      Point b1, b2;
+      bool meet;
+      const char* why;
+    };
+    const Row rows[] = {
+        {ahead, out, true, "a side along the other's side: they share a segment"},
+        {behind, back, false, "a side along the other's, beyond the apex: only the apex is shared"},
+    };
+    for (const Row& row : rows) {
+      const Tri y = detail::make_tri<Kernel>(v, row.b1, row.b2, 1, 4, 5);
+      INFO(row.why << ", trial " << trial);
+      REQUIRE(truth(x, y, 1) == row.meet);
+      CHECK(detail::faces_intersect<Kernel>(x, y) == row.meet);
+      CHECK(detail::faces_intersect<Kernel>(y, x) == row.meet);
+    }
+  }
+}
