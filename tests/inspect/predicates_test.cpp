@@ -9,6 +9,8 @@
 #include <random>
 
 #include "polyheal/inspect/predicates.h"
+#include "polyheal/inspect/exact_predicates.h"
+#include "polyheal/mesh/mesh.h"
 
 using namespace polyheal;
 using Q = CGAL::Exact_rational;
@@ -64,4 +66,44 @@ TEST_CASE("predicates: angle tests equal exact rational evaluation", "[inspect]"
     }
   }
   CHECK(checked > 9000);
+}
+
+TEST_CASE("predicates: exact right angles are classified without the sign of their zero dot product",
+          "[inspect]") {
+  // Slicing perpendicular to an edge makes exact right angles, and CAD parts
+  // are full of them: u.v = 0 there, which no filter can sign, yet how the
+  // angle compares with any threshold follows from the other test alone. One
+  // row per triangle: legs along exactly orthogonal directions (3, 4, 0) and
+  // (-4, 3, 0), of lengths 1 and r; its smaller angle is atan(r).
+  const double cap = cos_degrees(175), needle = cos_degrees(5);
+  struct Row {
+    double r;
+    Shape want;
+    const char* why;
+  };
+  const Row rows[] = {
+      {1.0, Shape::fine, "isosceles: 90, 45, 45"},
+      {0.1, Shape::fine, "90, 84.3, 5.7"},
+      {0.05, Shape::needle, "90, 87.1, 2.9"},
+      {1e-6, Shape::needle, "a right-angled needle"},
+  };
+  for (const Row& row : rows) {
+    INFO(row.why);
+    for (double scale : {1.0, 1e-9, 3e7}) {
+      // doubles: exact right angle (0.6, 0.8) . (-0.8, 0.6) is not exact in
+      // binary, so the legs are (3, 4) and (-4, 3) scaled by powers of two
+      const double s = scale, rr = row.r;
+      const Point3d a{1 * s, 2 * s, 3 * s}, b{a[0] + 3 * s, a[1] + 4 * s, a[2]},
+          c{a[0] - 4 * s * rr, a[1] + 3 * s * rr, a[2]};
+      const bool orthogonal = (b[0] - a[0]) * (c[0] - a[0]) + (b[1] - a[1]) * (c[1] - a[1]) == 0;
+      if (orthogonal) CHECK(classify_triangle(a, b, c, cap, needle) == row.want);
+      // lazy rationals (no double is any of these corners): thirds of the same
+      const Kernel::FT third = Kernel::FT(1) / Kernel::FT(3);
+      const Point pa(Kernel::FT(s) * third, Kernel::FT(2 * s) * third, Kernel::FT(3 * s) * third);
+      const Point pb = pa + Kernel::Vector_3(3, 4, 0) * (Kernel::FT(s) * third);
+      const Point pc = pa + Kernel::Vector_3(-4, 3, 0) * (Kernel::FT(s) * Kernel::FT(rr) * third);
+      CHECK(classify_triangle(pa, pb, pc, cap, needle) == row.want);
+      CHECK(classify_triangle(pb, pc, pa, cap, needle) == row.want);
+    }
+  }
 }

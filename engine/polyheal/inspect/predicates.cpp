@@ -47,14 +47,19 @@ Vec<NT> cross(const Vec<NT>& u, const Vec<NT>& v) {
 }
 
 /// Signs of u.v and of T = (u.v)^2 - c^2 (u.u)(v.v): they decide how the angle
-/// between u and v compares with acos(c), without square roots. With
-/// intervals, an undecidable sign throws Uncertain_conversion_exception.
+/// between u and v compares with acos(c), without square roots. T < 0
+/// (|cos| below |c|) decides every comparison alone (greater_from_signs,
+/// less_from_signs), so then u.v's sign is not asked and reported as 0: at
+/// a right angle, which slicing perpendicular to an edge makes and CAD
+/// parts are full of, u.v is exactly 0 and no interval decides its sign.
+/// With intervals, an undecidable sign throws Uncertain_conversion_exception.
 template <class NT>
 std::pair<int, int> angle_signs(const Vec<NT>& u, const Vec<NT>& v, double c) {
   const NT d = dot(u, v);
   const NT t = d * d - NT(c) * NT(c) * dot(u, u) * dot(v, v);
-  return {static_cast<int>(static_cast<CGAL::Sign>(CGAL::sign(d))),
-          static_cast<int>(static_cast<CGAL::Sign>(CGAL::sign(t)))};
+  const int test = static_cast<int>(static_cast<CGAL::Sign>(CGAL::sign(t)));
+  if (test < 0) return {0, test};
+  return {static_cast<int>(static_cast<CGAL::Sign>(CGAL::sign(d))), test};
 }
 
 /// Static filter for the angle tests, in plain double arithmetic.
@@ -89,10 +94,16 @@ StaticAngle static_angle(const Point3d& apex, const Point3d& b, const Point3d& c
   const double scale = D * D + R;
   if (!(scale > 1e-250)) return r;
   const double T = d * d - R;
-  if (std::fabs(T) <= 1e-13 * scale || std::fabs(d) <= 1e-13 * D) return r;
+  if (std::fabs(T) <= 1e-13 * scale) return r;
+  if (T < 0) {  // decides alone (see angle_signs): a right angle needs no sign of u.v
+    r.decided = true;
+    r.test_sign = -1;
+    return r;
+  }
+  if (std::fabs(d) <= 1e-13 * D) return r;
   r.decided = true;
   r.dot_sign = d > 0 ? 1 : -1;
-  r.test_sign = T > 0 ? 1 : -1;
+  r.test_sign = 1;
   return r;
 }
 
