@@ -107,3 +107,34 @@ TEST_CASE("predicates: exact right angles are classified without the sign of the
     }
   }
 }
+
+TEST_CASE("predicates: normals_agree equals the exact sign of the normals' dot product", "[inspect]") {
+  // Random triangles of lazy rational points (thirds of doubles), and pairs
+  // whose normals are perpendicular up to a tiny tilt or exactly, where the
+  // interval path cannot decide and the exact one must.
+  std::mt19937_64 rng(77);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const Kernel::FT third = Kernel::FT(1) / Kernel::FT(3);
+  auto point = [&](double x, double y, double z) { return Point(Kernel::FT(x) * third, Kernel::FT(y) * third, Kernel::FT(z) * third); };
+  int positive = 0, other = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const Point a = point(u(rng), u(rng), u(rng)), b = point(u(rng), u(rng), u(rng)), c = point(u(rng), u(rng), u(rng));
+    Point d, e, f;
+    if (i % 3 == 0) {  // random
+      d = point(u(rng), u(rng), u(rng)), e = point(u(rng), u(rng), u(rng)), f = point(u(rng), u(rng), u(rng));
+    } else {  // def contains abc's normal direction (tilted by 0 or 1e-22): normals perpendicular
+      const Kernel::Vector_3 n = CGAL::cross_product(b - a, c - a);
+      const double tilt = i % 3 == 1 ? 0.0 : 1e-22 * u(rng);
+      // def's normal is (n + tilt (c - a)) x (b - a): its dot with n is
+      // tilt * n . ((c - a) x (b - a)) = -tilt |n|^2
+      d = point(u(rng), u(rng), u(rng));
+      e = d + n + (c - a) * Kernel::FT(tilt);
+      f = d + (b - a);
+    }
+    const bool want = CGAL::is_positive(CGAL::cross_product(b - a, c - a) * CGAL::cross_product(e - d, f - d));
+    CHECK(normals_agree(a, b, c, d, e, f) == want);
+    ++(want ? positive : other);
+  }
+  CHECK(positive > 300);
+  CHECK(other > 300);
+}

@@ -17,6 +17,12 @@ Shape classify_triangle(const Point& a, const Point& b, const Point& c, double c
 /// to the plane). Exact. Precondition: e and n are not zero.
 bool angle_to_plane_less(const Kernel::Vector_3& e, const Kernel::Vector_3& n, double sin_threshold);
 
+/// Do triangles abc and def face the same way: is the dot product of their
+/// normals (b - a) x (c - a) and (e - d) x (f - d) positive? Exact: intervals
+/// from the points' own approximations first, lazy exact arithmetic only
+/// when the sign is uncertain.
+bool normals_agree(const Point& a, const Point& b, const Point& c, const Point& d, const Point& e, const Point& f);
+
 /// Index of the corner with the largest interior angle of the polygon
 /// (corners in order; exact comparison of the angles' cosines; ties to the
 /// lexicographically smallest point, whatever corner the list starts at).

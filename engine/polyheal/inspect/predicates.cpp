@@ -62,6 +62,13 @@ std::pair<int, int> angle_signs(const Vec<NT>& u, const Vec<NT>& v, double c) {
   return {static_cast<int>(static_cast<CGAL::Sign>(CGAL::sign(d))), test};
 }
 
+/// x - y in intervals, from the exact points' own approximations (no lazy
+/// expression built). The caller protects the rounding mode.
+Vec<Interval> isub(const Point& x, const Point& y) {
+  const auto &ax = x.approx(), &ay = y.approx();
+  return Vec<Interval>{ax.x() - ay.x(), ax.y() - ay.y(), ax.z() - ay.z()};
+}
+
 /// Static filter for the angle tests, in plain double arithmetic.
 ///
 /// For u = b - a, v = c - a (a, b, c doubles), the tests compare
@@ -163,10 +170,6 @@ Shape classify_triangle(const Point& a, const Point& b, const Point& c, double c
   auto sub = [](const Point& x, const Point& y) { return Vec<FT>{x.x() - y.x(), x.y() - y.y(), x.z() - y.z()}; };
   // Intervals from the points' own approximations first (no lazy DAG built),
   // exact lazy arithmetic only when a sign is uncertain.
-  auto isub = [](const Point& x, const Point& y) {
-    const auto &ax = x.approx(), &ay = y.approx();
-    return Vec<Interval>{ax.x() - ay.x(), ax.y() - ay.y(), ax.z() - ay.z()};
-  };
   auto decide = [&](const Point& apex, const Point& y, const Point& z, double c, auto from_signs) {
     {
       CGAL::Protect_FPU_rounding<true> protect;
@@ -185,6 +188,16 @@ Shape classify_triangle(const Point& a, const Point& b, const Point& c, double c
       [&](const Point& x, const Point& y, const Point& z) { return decide(x, y, z, cos_needle, less_from_signs); });
 }
 
+
+bool normals_agree(const Point& a, const Point& b, const Point& c, const Point& d, const Point& e, const Point& f) {
+  {
+    CGAL::Protect_FPU_rounding<true> protect;
+    const Interval s = dot(cross(isub(b, a), isub(c, a)), cross(isub(e, d), isub(f, d)));
+    if (s.inf() > 0) return true;
+    if (s.sup() <= 0) return false;
+  }
+  return CGAL::is_positive(CGAL::cross_product(b - a, c - a) * CGAL::cross_product(e - d, f - d));
+}
 
 bool angle_to_plane_less(const Kernel::Vector_3& e, const Kernel::Vector_3& n, double sin_threshold) {
   // angle(e, plane) < d  <=>  |cos(e, n)| < sin d  <=>  (e.n)^2 - sin^2 d |e|^2 |n|^2 < 0

@@ -326,6 +326,39 @@ class Bvh {
     return {best, index};
   }
 
+  /// Is a triangle within squared distance r2 of p? Stops at the first;
+  /// `found` is set to it. (Boxes are pruned with a relative slack of 1e-12,
+  /// so rounding in a box's distance never hides a triangle within r2.)
+  bool any_within(const V3& p, double r2, std::size_t& found) const {
+    if (nodes_.empty()) return false;
+    const double prune = r2 * (1 + 1e-12);
+    std::uint32_t last = std::numeric_limits<std::uint32_t>::max();
+    std::array<std::uint32_t, 128> stack;
+    std::size_t top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& n = nodes_[stack[--top]];
+      if (box_distance2(n.box, p) > prune) continue;
+      if (n.leaf) {
+        for (std::uint32_t i = n.a; i < n.a + n.b; ++i) {
+          const Entry& e = entries_[i];
+          if (e.triangle == last || box_distance2(e.box, p) > prune) continue;
+          last = e.triangle;
+          if (distance2(p, e.triangle) <= r2) {
+            found = e.triangle;
+            return true;
+          }
+        }
+        continue;
+      }
+      const double dl = box_distance2(nodes_[n.a].box, p), dr = box_distance2(nodes_[n.b].box, p);
+      const bool left_first = dl < dr;
+      stack[top++] = left_first ? n.b : n.a;
+      stack[top++] = left_first ? n.a : n.b;
+    }
+    return false;
+  }
+
   /// The triangles with a piece whose box meets [lo, hi], each once, in increasing order.
   std::vector<std::size_t> meeting(const Point3d& lo, const Point3d& hi) const {
     std::vector<std::size_t> out;
@@ -490,6 +523,12 @@ double SurfaceDistance::squared_distance(const Point3d& p, const Point3d& hint) 
   const V3 q{p[0], p[1], p[2]}, d = q - V3{hint[0], hint[1], hint[2]};
   // the hint lies on the surface: its distance bounds the nearest one
   return impl_->bvh->nearest(q, dot(d, d), 0).first;
+}
+
+bool SurfaceDistance::any_within(const Point3d& p, double r2, std::size_t& hint) const {
+  const V3 q{p[0], p[1], p[2]};
+  if (hint < impl_->triangles.size() && impl_->bvh->distance2(q, hint) <= r2) return true;
+  return impl_->bvh->any_within(q, r2, hint);
 }
 
 std::vector<std::size_t> SurfaceDistance::triangles_near(const Point3d& lo, const Point3d& hi) const {

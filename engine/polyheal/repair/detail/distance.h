@@ -39,6 +39,10 @@ class SurfaceDistance {
   std::pair<double, std::size_t> nearest(const Point3d& p, std::size_t hint) const;
   /// Squared distance from p to surface triangle `t`.
   double squared_distance_to(const Point3d& p, std::size_t t) const;
+  /// Is some surface triangle within squared distance r2 of p? `hint` (a
+  /// triangle index, or anything out of range) is tried first and becomes
+  /// the triangle found: neighbouring queries mostly share it.
+  bool any_within(const Point3d& p, double r2, std::size_t& hint) const;
   /// Indices of the surface triangles whose bounding boxes meet the box
   /// [lo, hi] (candidates for squared_distance_to).
   std::vector<std::size_t> triangles_near(const Point3d& lo, const Point3d& hi) const;

@@ -142,11 +142,9 @@ struct ShapeDecimator::Impl {
     return false;
   }
 
-  Kernel::Vector_3 normal(const Triple& t) const {
-    return CGAL::cross_product(mesh.point(t[1]) - mesh.point(t[0]), mesh.point(t[2]) - mesh.point(t[0]));
-  }
   bool same_side(const Triple& a, const Triple& b) const {
-    return CGAL::is_positive(normal(a) * normal(b));
+    return normals_agree(mesh.point(a[0]), mesh.point(a[1]), mesh.point(a[2]), mesh.point(b[0]), mesh.point(b[1]),
+                         mesh.point(b[2]));
   }
 
   // ---- planning (the mesh is not touched) ----
@@ -185,11 +183,9 @@ struct ShapeDecimator::Impl {
   bool within_tolerance(const Plan& plan) const {
     bool ok = true;
     // "Within the tolerance" needs one input triangle close enough, not the
-    // nearest: test the input triangles near the new faces, stopping at the
-    // first that is (the last one found first: neighbouring samples share it).
-    std::vector<std::size_t> near;
-    std::size_t last = 0;
-    bool have_near = false;
+    // nearest: the search stops at the first (the last one found is tried
+    // first: neighbouring samples share it).
+    std::size_t last = std::numeric_limits<std::size_t>::max();
     for (const Triple& t : plan.proposed) {
       // Every vertex lies on the input surface, so a triangle no longer than
       // the tolerance is within it everywhere; longer ones are sampled.
@@ -199,22 +195,6 @@ struct ShapeDecimator::Impl {
         longest2 = std::max(longest2, dot(d, d));
       }
       if (longest2 <= tol2) continue;
-      if (!have_near) {
-        Point3d lo = approx(plan.proposed[0][0]), hi = lo;
-        for (const Triple& u : plan.proposed)
-          for (vertex_descriptor v : u)
-            for (int d = 0; d < 3; ++d) {
-              lo[d] = std::min(lo[d], approx(v)[d]);
-              hi[d] = std::max(hi[d], approx(v)[d]);
-            }
-        const double r = std::sqrt(tol2);
-        for (int d = 0; d < 3; ++d) {
-          lo[d] -= r;
-          hi[d] += r;
-        }
-        near = input.triangles_near(lo, hi);
-        have_near = true;
-      }
       const int steps = std::min(6, 1 + static_cast<int>(std::sqrt(longest2 / tol2)));
       const std::array<Point3d, 3> corner{approx(t[0]), approx(t[1]), approx(t[2])};
       for_each_sample(t, steps, [&](const Point3d& p) {
@@ -225,13 +205,7 @@ struct ShapeDecimator::Impl {
           const Point3d d = p - c;
           if (dot(d, d) <= tol2) return;
         }
-        if (!near.empty() && input.squared_distance_to(p, near[last]) <= tol2) return;
-        for (std::size_t i = 0; i < near.size(); ++i)
-          if (input.squared_distance_to(p, near[i]) <= tol2) {
-            last = i;
-            return;
-          }
-        ok = false;
+        if (!input.any_within(p, tol2, last)) ok = false;
       });
       if (!ok) return false;
     }
