@@ -318,10 +318,7 @@ class Bvh {
         }
         continue;
       }
-      const double dl = box_distance2(nodes_[n.a].box, p), dr = box_distance2(nodes_[n.b].box, p);
-      const bool left_first = dl < dr;  // the nearer child is visited first
-      stack[top++] = left_first ? n.b : n.a;
-      stack[top++] = left_first ? n.a : n.b;
+      push_children(n, p, stack, top);
     }
     return {best, index};
   }
@@ -351,10 +348,7 @@ class Bvh {
         }
         continue;
       }
-      const double dl = box_distance2(nodes_[n.a].box, p), dr = box_distance2(nodes_[n.b].box, p);
-      const bool left_first = dl < dr;
-      stack[top++] = left_first ? n.b : n.a;
-      stack[top++] = left_first ? n.a : n.b;
+      push_children(n, p, stack, top);
     }
     return false;
   }
@@ -401,6 +395,12 @@ class Bvh {
     bool leaf = false;
   };
 
+  /// Pushes an inner node's children, the nearer to p last (visited first).
+  void push_children(const Node& n, const V3& p, std::array<std::uint32_t, 128>& stack, std::size_t& top) const {
+    const bool left_first = box_distance2(nodes_[n.a].box, p) < box_distance2(nodes_[n.b].box, p);
+    stack[top++] = left_first ? n.b : n.a;
+    stack[top++] = left_first ? n.a : n.b;
+  }
   static double longest2(const V3& a, const V3& b, const V3& c) {
     return std::max({dot(b - a, b - a), dot(c - b, c - b), dot(a - c, a - c)});
   }
