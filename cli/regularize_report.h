@@ -32,6 +32,7 @@ inline nlohmann::json regularize_json(const RepairFiles& a, const RegularizeRepo
         {"vertices", r.vertices},
         {"components", r.components_in},
         {"polygons_fanned", r.polygons_fanned},
+        {"walls_left_out", r.walls_left_out},
         {"zero_area_faces", r.zero_area_faces},
         {"intersecting_pairs", r.intersecting_pairs_in},
         {"intersecting_faces", r.intersecting_faces_in}}},
@@ -92,6 +93,10 @@ inline void print_regularize_text(const RepairFiles& a, const RegularizeReport& 
   if (r.zero_area_faces)
     std::printf("  %zu zero-area faces left out (they bound nothing; T-junctions they closed are split)\n",
                 r.zero_area_faces);
+  if (r.walls_left_out)
+    std::printf("  %zu faces left out first: walls or faces doubled in one direction, without which every edge is "
+                "used as often each way (the surface bounds a volume)\n",
+                r.walls_left_out);
   if (r.polygons_fanned)
     std::printf("  %zu polygons fanned into triangles (counts below are of triangles)\n",
                 r.polygons_fanned);
@@ -113,9 +118,14 @@ inline void print_regularize_text(const RepairFiles& a, const RegularizeReport& 
     std::printf("  rounding to doubles made %zu pairs intersect; deintersect moved %zu vertices; %d regularization "
                 "passes\n",
                 r.rounding_pairs, r.rounding_moves, r.rounding_passes);
-  std::printf("  distance to the input: output -> input at most %.3g; Hausdorff %.6g +- %.2g (%.3g%% of the bbox "
-              "diagonal)\n",
-              r.max_distance_to_input, r.hausdorff, r.hausdorff_error_bound, 100.0 * r.hausdorff / diag);
+  if (r.faces_out == 0)
+    std::printf("  no face left: the input encloses no volume (winding number 0 everywhere off it: a surface facing "
+                "inwards, or a double-sided sheet, whose opposite faces cancel); `polyheal rebuild` makes a solid "
+                "of a sheet\n");
+  else
+    std::printf("  distance to the input: output -> input at most %.3g; Hausdorff %.6g +- %.2g (%.3g%% of the bbox "
+                "diagonal)\n",
+                r.max_distance_to_input, r.hausdorff, r.hausdorff_error_bound, 100.0 * r.hausdorff / diag);
   std::printf("  volume %.9g, %zu components\n", r.out.signed_volume, r.out.components);
   std::printf("  time: detect %.3f s, intersections %.3f s, grow %.3f s, stitch %.3f s, certify %.3f s; peak memory "
               "%.0f MB\n",

@@ -96,9 +96,11 @@ expect 0 "regularize leaves a zero-area face out and splits its T-junction" -- "
 grep_out "1 zero-area faces left out" "$tmp/out" "regularize reports the zero-area face"
 printf 'OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 2 3\n' > "$tmp/open.off"
 expect 2 "regularize refuses an open mesh" -- "$bin" regularize "$tmp/open.off" -o "$tmp/z.off"
-grep_out "open.off: edge (0, 3) is used 1 more times in one direction than in the other: the surface is not closed" "$tmp/err" "regularize names the file, the edge and the reason"
+grep_out "open.off: edge (0, 1) is used 1 more times in one direction than in the other: the surface is not closed" "$tmp/err" "regularize names the file, the edge and the reason"
 [ "$(wc -l < "$tmp/err")" -eq 1 ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: regularize error is not one line"; }
 [ ! -e "$tmp/z.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: regularize wrote output on error"; }
+expect 0 "regularize leaves out the walls between glued convex pieces" -- "$bin" regularize "$src/fixtures/deer_bound.off" -o "$tmp/deer.off"
+grep_out "6 faces left out first: walls or faces doubled in one direction" "$tmp/out" "regularize reports the walls it left out"
 expect 2 "regularize malformed input" -- "$bin" regularize "$tmp/bad.off" -o "$tmp/z.off"
 expect 2 "regularize never writes over its input" -- "$bin" regularize "$tmp/sph_union.off" -o "$tmp/sph_union.off" --overwrite
 expect 0 "regularize help" -- "$bin" regularize --help

@@ -285,6 +285,77 @@ TEST_CASE("regularize: a zero-area face closing a T-junction is left out, and th
   CHECK(r.report.max_distance_to_input == 0);
 }
 
+namespace {
+
+/// `s` without the faces whose corners all lie in the plane x = `x`.
+Soup without_faces_at(const Soup& s, double x) {
+  Soup out;
+  out.points = s.points;
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    const FaceView v = s.face(f);
+    if (s.points[v[0]][0] == x && s.points[v[1]][0] == x && s.points[v[2]][0] == x) continue;
+    out.add_triangle(v[0], v[1], v[2]);
+  }
+  return out;
+}
+
+/// The faces of `s` in the plane x = `x`, turned over when `flip`.
+Soup faces_at(const Soup& s, double x, bool flip) {
+  Soup out;
+  out.points = s.points;
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    const FaceView v = s.face(f);
+    if (s.points[v[0]][0] == x && s.points[v[1]][0] == x && s.points[v[2]][0] == x)
+      flip ? out.add_triangle(v[0], v[2], v[1]) : out.add_triangle(v[0], v[1], v[2]);
+  }
+  return out;
+}
+
+bool any_face_at(const Soup& s, double x) { return faces_at(s, x, false).face_count() > 0; }
+
+}  // namespace
+
+TEST_CASE("regularize: walls and faces doubled in one direction are left out first (convex pieces glued)") {
+  // Two unit boxes side by side, glued along x = 1 the way a convex
+  // decomposition's pieces are: neither surface balances on its own rim there.
+  const Box a{{{0, 0, 0}, {1, 1, 1}}}, b{{{1, 0, 0}, {2, 1, 1}}};
+  const Soup sides = test::concat(without_faces_at(box(a), 1), without_faces_at(box(b), 1));
+  SECTION("one cap left between them: a one-sided wall") {
+    const Soup in = test::concat(sides, faces_at(box(a), 1, false));
+    const RegularizeResult r = regularize(in);
+    CHECK(r.report.walls_left_out == 2);
+    const Soup out = written(r, "regularize_wall.off");
+    const Report rep = inspect(out);
+    CHECK(rep.certified_clean());
+    CHECK(rep.components == 1);
+    CHECK(rep.signed_volume == Approx(2).epsilon(1e-12));
+    CHECK_FALSE(any_face_at(out, 1));
+    CHECK(r.report.faces_kept == 20);
+  }
+  SECTION("both caps, turned the same way: the shared face given twice in one direction") {
+    const Soup in = test::concat(test::concat(sides, faces_at(box(a), 1, false)), faces_at(box(b), 1, true));
+    const RegularizeResult r = regularize(in);
+    CHECK(r.report.walls_left_out == 4);
+    const Soup out = written(r, "regularize_doubled_cap.off");
+    const Report rep = inspect(out);
+    CHECK(rep.certified_clean());
+    CHECK(rep.signed_volume == Approx(2).epsilon(1e-12));
+    CHECK_FALSE(any_face_at(out, 1));
+  }
+  SECTION("the corpus case: V-HACD's deer_bound (one wall, one doubled face), and TetGen meshes the output") {
+    const Soup in = read_soup(test::fixture("deer_bound.off"));
+    REQUIRE_FALSE(test::tetgen_meshes(test::fixture("deer_bound.off"), "regularize_in_deer_bound.off"));
+    const RegularizeResult r = regularize(in);
+    CHECK(r.report.walls_left_out == 6);
+    std::string path;
+    const Soup out = written(r, "regularize_deer_bound.off", &path);
+    CHECK(inspect(out).certified_clean());
+    CHECK(off_surface(in, out) < 1e-9 * r.report.bbox_diagonal);
+    CHECK(r.report.faces_kept > in.face_count() * 9 / 10);
+    CHECK(test::tetgen_meshes(path, "regularize_out_deer_bound.off"));
+  }
+}
+
 TEST_CASE("regularize: a surface facing inwards encloses nothing") {
   const RegularizeResult r = regularize(box({{{0, 0, 0}, {1, 1, 1}}}, true));
   CHECK(r.soup.face_count() == 0);
@@ -298,5 +369,16 @@ TEST_CASE("regularize: refuses what it does not handle, naming the problem") {
     open.indices.resize(open.indices.size() - 3);
     open.offsets.pop_back();
     CHECK_THROWS_WITH(regularize(open), Catch::Contains("not closed"));
+  }
+  SECTION("a face turned the wrong way is not a wall") {
+    Soup turned = box({{{0, 0, 0}, {1, 1, 1}}});
+    std::swap(turned.indices[1], turned.indices[2]);
+    CHECK_THROWS_WITH(regularize(turned), Catch::Contains("not closed"));
+  }
+  SECTION("a fin on a closed box (two edges with one use) is not a wall") {
+    Soup fin = box({{{0, 0, 0}, {1, 1, 1}}});
+    fin.points.push_back({0.5, -1, 0.5});
+    fin.add_triangle(0, 1, Index(fin.points.size() - 1));
+    CHECK_THROWS_WITH(regularize(fin), Catch::Contains("not closed"));
   }
 }

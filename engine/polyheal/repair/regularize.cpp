@@ -21,6 +21,7 @@
 #include "polyheal/mesh/convert.h"
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/mesh.h"
+#include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/union_find.h"
 #include "polyheal/mesh/weld.h"
 #include "polyheal/repair/deintersect.h"
@@ -1129,6 +1130,85 @@ void split_pinches(const Soup& input, bool input_manifold, RegularizeResult& res
 
 /// The corner polygon f is fanned from: the first whose fan has no exactly
 /// zero-area triangle (0 if none has).
+/// The faces to leave out so that `s` (welded) bounds a volume — every edge
+/// used as often in each direction, so that the winding number is defined
+/// off the surface — when walls and doubled faces are all that stop it: a
+/// one-sided wall between two solids that both lack the face they share (a
+/// convex decomposition's pieces glued, one cap left between them), the
+/// shared face given twice in one direction. Empty when `s` balances already.
+///
+/// The surface is cut into sheets: faces joined across edges with exactly
+/// two uses in opposite directions. A sheet's net use of the other edges is
+/// what leaving it out changes. Smaller sheets are tried first (a wall is a
+/// face or two; the solids beside it are large), and one is left out only
+/// when that lowers the total imbalance (sum over edges of |uses one way -
+/// uses the other|) and every edge it shares with the rest has three or more
+/// uses: a wall meets solids along its whole rim. So a hole stays a hole (an
+/// edge with one use) and faces turned the wrong way stay (two uses in one
+/// direction: an orientation defect, for `repair`). Throws UnsupportedInput,
+/// naming an edge, when what is left still does not balance.
+std::vector<std::size_t> walls_to_leave_out(const Soup& s) {
+  const Topology t = analyze_topology(s);
+  std::unordered_map<std::uint64_t, long> balance;  // the edges that are not interior
+  auto sign = [](const EdgeUse& u) { return u.from < u.to ? 1L : -1L; };
+  long total = 0;
+  for (const auto* edges : {&t.boundary_edges, &t.nonmanifold_edges, &t.misoriented_edges})
+    for (const Edge& e : *edges) {
+      long b = 0;
+      for (const EdgeUse& u : e.uses) b += sign(u);
+      balance[edge_key(e.a, e.b)] = b;
+      total += std::abs(b);
+    }
+  if (total == 0) return {};
+  UnionFind sheet_of(s.face_count());
+  for (const Topology::InteriorEdge& e : t.interior_edges) sheet_of.unite(e.face0, e.face1);
+  struct Sheet {
+    std::vector<std::size_t> faces;
+    std::map<std::uint64_t, long> uses;  // net use of each edge that is not interior
+    bool wall = true;                    // every edge it shares with the rest has 3+ uses
+  };
+  std::map<std::size_t, Sheet> sheets;   // by the smallest face in it
+  for (std::size_t f = 0; f < s.face_count(); ++f) sheets[sheet_of.find(f)].faces.push_back(f);
+  for (const auto* edges : {&t.boundary_edges, &t.nonmanifold_edges, &t.misoriented_edges})
+    for (const Edge& e : *edges)
+      for (const EdgeUse& u : e.uses) {
+        Sheet& sh = sheets[sheet_of.find(u.face)];
+        sh.uses[edge_key(e.a, e.b)] += sign(u);
+        sh.wall &= e.uses.size() >= 3;
+      }
+  std::vector<Sheet*> order;
+  for (auto& [first, sh] : sheets)
+    if (sh.wall) order.push_back(&sh);
+  std::stable_sort(order.begin(), order.end(),
+                   [](const Sheet* a, const Sheet* b) { return a->faces.size() < b->faces.size(); });
+  std::vector<std::size_t> out;
+  for (bool progress = true; total > 0 && progress;) {
+    progress = false;
+    for (Sheet*& sh : order) {
+      if (!sh) continue;
+      long gain = 0;
+      for (const auto& [key, n] : sh->uses) gain += std::abs(balance[key]) - std::abs(balance[key] - n);
+      if (gain <= 0) continue;
+      for (const auto& [key, n] : sh->uses) balance[key] -= n;
+      total -= gain;
+      out.insert(out.end(), sh->faces.begin(), sh->faces.end());
+      sh = nullptr;
+      progress = true;
+    }
+  }
+  if (total > 0) {
+    std::uint64_t worst = std::numeric_limits<std::uint64_t>::max();
+    for (const auto& [key, b] : balance)
+      if (b != 0) worst = std::min(worst, key);
+    throw UnsupportedInput("edge (" + std::to_string(worst >> 32) + ", " + std::to_string(worst & 0xFFFFFFFFu) +
+                           ") is used " + std::to_string(std::abs(balance[worst])) +
+                           " more times in one direction than in the other: the surface is not closed "
+                           "and consistently oriented, which regularize needs");
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 std::size_t fan_apex(const Soup& soup, std::size_t f) {
   const FaceView v = soup.face(f);
   const std::size_t n = v.size();
@@ -1182,29 +1262,38 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
     return result;
   }
   const Soup input = apply_weld(raw, weld_identical_points(raw.points));
+  if (input.face_count() == 0) throw UnsupportedInput("no faces");
+  // A closed, consistently oriented surface (non-manifold edges allowed):
+  // every edge used as often in each direction. Then the winding number is
+  // defined everywhere off the surface. Walls and doubled faces that stop
+  // that are left out first (reported); the rest is regularized, and the
+  // output is certified against the whole input.
+  if (const std::vector<std::size_t> walls = walls_to_leave_out(input); !walls.empty()) {
+    Soup rest;
+    rest.points = raw.points;
+    std::vector<std::size_t> kept;
+    for (std::size_t f = 0, w = 0; f < raw.face_count(); ++f) {
+      if (w < walls.size() && walls[w] == f) {
+        ++w;
+        continue;
+      }
+      const FaceView v = raw.face(f);
+      rest.add_triangle(v[0], v[1], v[2]);
+      kept.push_back(f);
+    }
+    if (rest.face_count() == 0) throw UnsupportedInput("no faces are left once the walls are left out");
+    RegularizeOptions inner = o;
+    inner.certify = false;
+    RegularizeResult result = regularize(rest, inner);
+    for (std::size_t& f : result.source_face) f = kept[f];
+    result.report.faces = raw.face_count();
+    result.report.walls_left_out = walls.size();
+    if (o.certify) certify(raw, result.soup, result.source_face, result.report);
+    return result;
+  }
   InspectOptions io;
   io.observer = o.observer;
   const Report in = inspect(input, io);
-  if (in.faces == 0) throw UnsupportedInput("no faces");
-  // A closed, consistently oriented surface (non-manifold edges allowed):
-  // every edge used as often in each direction. Then the winding number is
-  // defined everywhere off the surface.
-  {
-    std::unordered_map<std::uint64_t, long> balance;
-    for (std::size_t f = 0; f < input.face_count(); ++f) {
-      const FaceView v = input.face(f);
-      for (int e = 0; e < 3; ++e) {
-        const Index a = v[e], b = v[(e + 1) % 3];
-        balance[(std::uint64_t(std::min(a, b)) << 32) | std::max(a, b)] += a < b ? 1 : -1;
-      }
-    }
-    for (const auto& [key, count] : balance)
-      if (count != 0)
-        throw UnsupportedInput("edge (" + std::to_string(key >> 32) + ", " + std::to_string(key & 0xFFFFFFFFu) +
-                               ") is used " + std::to_string(std::abs(count)) +
-                               " more times in one direction than in the other: the surface is not closed "
-                               "and consistently oriented, which regularize needs");
-  }
   r.zero_area_faces = in.degenerate_faces.size();
   r.faces = in.faces;
   r.vertices = raw.points.size();

@@ -4,7 +4,12 @@
 // `polyheal regularize`, stage by stage (the paper's Fig. 3):
 //   1. detect     the input must be a closed, consistently oriented triangle
 //                 mesh (several components, overlapping each other, are the
-//                 point). Exactly zero-area faces are left out (§3.1): they
+//                 point): every edge used as often in each direction, so that
+//                 the winding number is defined. Where one-sided walls or
+//                 faces doubled in one direction are all that stop that (a
+//                 convex decomposition's pieces glued with a cap left between
+//                 them), those sheets are left out first and reported; an
+//                 open surface is refused. Exactly zero-area faces are left out (§3.1): they
 //                 bound nothing, and the neighbour across one that closes a
 //                 T-junction meets its middle corner, an intersection the
 //                 sub-triangulation splits it at. Which faces intersect is
@@ -92,6 +97,7 @@ struct RegularizeReport {
   std::size_t faces = 0, vertices = 0, components_in = 0;
   std::size_t zero_area_faces = 0;     // left out (§3.1): they bound nothing
   std::size_t polygons_fanned = 0;     // input faces with more than 3 corners, fanned into triangles
+  std::size_t walls_left_out = 0;      // faces left out first so that the surface bounds a volume (walls, doubled faces)
   std::size_t intersecting_pairs_in = 0, intersecting_faces_in = 0;
   double bbox_diagonal = 0;
   // growing (the paper's Table 1 and Fig. 2 groups, counted over input triangles)
@@ -133,8 +139,9 @@ struct RegularizeResult {
 /// Stages 1-3, the repair of what rounding broke, and, with
 /// options.certify, stage 4 on the rounded result. Throws UnsupportedInput
 /// for an input that is not a closed, consistently oriented triangle mesh
-/// (every edge used as often in each direction). An input facing inwards
-/// everywhere encloses nothing: the output is empty.
+/// (every edge used as often in each direction) once walls and doubled faces
+/// are left out (report.walls_left_out). An input facing inwards everywhere,
+/// or a double-sided sheet, encloses nothing: the output is empty.
 RegularizeResult regularize(const Soup& input, const RegularizeOptions& options = {});
 
 /// Is output face f its source face (face source_face[f] of `input`),
