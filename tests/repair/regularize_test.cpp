@@ -268,6 +268,19 @@ TEST_CASE("regularize: quad faces are fanned, and the output names the quad each
   CHECK(r.report.max_distance_to_input < 1e-12);
 }
 
+TEST_CASE("regularize: faces with a repeated corner index are left out (they bound nothing)") {
+  // as trimesh's capsule has at its poles: (a, a, b) uses a -> b and b -> a
+  // once each, and the "edge" a -> a is no edge (it was refused as one)
+  Soup in = box({{{0, 0, 0}, {1, 1, 1}}});
+  in.add_triangle(0, 0, 1);
+  in.add_triangle(6, 2, 6);
+  const RegularizeResult r = regularize(in);
+  CHECK(r.report.zero_area_faces == 2);
+  const Soup out = written(r, "regularize_repeated_index.off");
+  CHECK(inspect(out).certified_clean());
+  CHECK(faces_by_position(out) == faces_by_position(box({{{0, 0, 0}, {1, 1, 1}}})));
+}
+
 TEST_CASE("regularize: a zero-area face closing a T-junction is left out, and the T-junction split (§3.1)") {
   // a box whose top is split by an exactly collinear face at a T-junction
   Soup in = box({{{0, 0, 0}, {1, 1, 1}}});
