@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "polyheal/inspect/report.h"
@@ -16,7 +17,11 @@
 #include "polyheal/mesh/mesh.h"
 #include "polyheal/repair/degenerate.h"
 #include "polyheal/repair/deintersect.h"
+#include "polyheal/inspect/exact_predicates.h"
+#include "polyheal/inspect/local_index.h"
+#include "polyheal/mesh/convert.h"
 #include "polyheal/repair/detail/distance.h"
+#include "polyheal/repair/detail/shape_decimation.h"
 #include "support/builders.h"
 
 using namespace polyheal;
@@ -188,6 +193,9 @@ DegenerateResult repair_fixture_as_written(const char* name) {
   DegenerateReport again = r.report;
   certify(input, written, again);
   check_repaired(input, written, again);
+  // no face folded onto a neighbour below TetGen's 0.1 degrees: with split
+  // points rounded early a fold no longer overlaps exactly (the fold guard)
+  CHECK(inspect(written).sharp_folds.empty());
   WARN(name << ": " << input.face_count() << " faces, " << r.report.before.caps << " caps, "
             << r.report.before.needles << " needles -> " << written.face_count() << " faces (peak "
             << r.report.peak_faces << "), " << r.report.wedge_cuts << " cuts across " << r.report.wedge_tips
@@ -338,4 +346,96 @@ TEST_CASE("degenerate with a fold angle: a spike folded onto its neighbours is c
   CHECK(r.report.collapses >= 1);
   CHECK(topology_of(out) == topology_of(in));
   CHECK(detail::hausdorff_distance(s, r.soup, 1e-7) < 1e-5);  // the bump was 1e-6 high
+}
+
+TEST_CASE("degenerate: a split point takes its doubles early only where that changes nothing the oracle checks",
+          "[repair][degenerate]") {
+  using detail::round_if_unchanged;
+  const double cos_cap = std::cos(175.0 * M_PI / 180.0), cos_needle = std::cos(5.0 * M_PI / 180.0);
+  const Kernel::FT tiny = Kernel::FT(std::ldexp(1.0, -600)) * Kernel::FT(std::ldexp(1.0, -600));  // rounds to 0
+  auto mesh_of = [](const std::vector<Point>& pts, const std::vector<std::array<int, 3>>& faces) {
+    Mesh m;
+    std::vector<vertex_descriptor> v;
+    for (const Point& p : pts) v.push_back(m.add_vertex(p));
+    for (const auto& f : faces) m.add_face(v[f[0]], v[f[1]], v[f[2]]);
+    return m;
+  };
+  SECTION("a point that rounds onto its face's base line would make the face degenerate: it stays exact") {
+    Mesh m = mesh_of({Point(0, 0, 0), Point(1, 0, 0), Point(Kernel::FT(0.5), tiny, Kernel::FT(0))}, {{0, 1, 2}});
+    LocalIndex index(m);
+    const vertex_descriptor v(2);
+    REQUIRE(approx_point3d(m.point(v))[1] == 0.0);
+    CHECK_FALSE(round_if_unchanged(m, index, v, cos_cap, cos_needle));
+    CHECK(m.point(v).y() == tiny);
+  }
+  SECTION("a point whose rounding makes its face a needle (angle at a just above 5 degrees, then below): exact") {
+    // a = 0, b = (L, 0, 0), v = (L/2, y, 0): the angle at a is below the
+    // needle angle iff y^2 < Y = (L/2)^2 (1 - c^2) / c^2 (c: the double
+    // cosine the classification uses). Find L whose threshold sqrt(Y) lies
+    // in the lower half of its double interval [h0, h1]: then y just below
+    // the interval's midpoint is fine exactly and rounds down to h0, a needle.
+    using FT = Kernel::FT;
+    const FT c2 = FT(cos_needle) * FT(cos_needle);
+    std::optional<std::pair<double, FT>> found;
+    for (double L = 1.0; L < 2.0 && !found; L += 0.0137) {
+      const FT Y = FT(L / 2) * FT(L / 2) * (FT(1) - c2) / c2;
+      double h0 = std::sqrt(CGAL::to_double(Y));
+      while (FT(h0) * FT(h0) >= Y) h0 = std::nextafter(h0, 0.0);
+      while (FT(std::nextafter(h0, 1.0)) * FT(std::nextafter(h0, 1.0)) < Y) h0 = std::nextafter(h0, 1.0);
+      const FT mid = (FT(h0) + FT(std::nextafter(h0, 1.0))) / FT(2);
+      if (!(Y < mid * mid)) continue;  // the threshold is in the upper half
+      FT delta = (mid - FT(h0)) / FT(2);
+      while (!((mid - delta) * (mid - delta) > Y)) delta = delta / FT(2);
+      found = std::make_pair(L, mid - delta);
+    }
+    REQUIRE(found);
+    const auto [L, y] = *found;
+    Mesh m = mesh_of({Point(0, 0, 0), Point(L, 0, 0), Point(FT(L / 2), y, FT(0))}, {{0, 1, 2}});
+    LocalIndex index(m);
+    const vertex_descriptor v(2);
+    REQUIRE(classify_face(m, face_descriptor(0), cos_cap, cos_needle) == Shape::fine);
+    const Point3d r = approx_point3d(m.point(v));
+    REQUIRE(classify_triangle(Point(0, 0, 0), Point(L, 0, 0), Point(r[0], r[1], r[2]), cos_cap, cos_needle) ==
+            Shape::needle);
+    CHECK_FALSE(round_if_unchanged(m, index, v, cos_cap, cos_needle));
+    CHECK(m.point(v).y() == y);
+  }
+  SECTION("a point just above a line through its face's base, whose doubles lie below it, would turn the face") {
+    // a = 0, b = (3, 1, 0): the line y = x / 3; v = (1, 1/3 + 2^-80, 0) is
+    // above it, and the double nearest its y is below 1/3. A cap before and
+    // after (the shape rule allows that): only the normals catch it.
+    using FT = Kernel::FT;
+    const FT y = FT(1) / FT(3) + FT(std::ldexp(1.0, -80));
+    Mesh m = mesh_of({Point(0, 0, 0), Point(3, 1, 0), Point(FT(1), y, FT(0))}, {{0, 1, 2}});
+    LocalIndex index(m);
+    const vertex_descriptor v(2);
+    REQUIRE(FT(approx_point3d(m.point(v))[1]) < FT(1) / FT(3));
+    CHECK_FALSE(round_if_unchanged(m, index, v, cos_cap, cos_needle));
+    CHECK(m.point(v).y() == y);
+  }
+  SECTION("a point that rounds onto another face's edge would make them meet: it stays exact") {
+    // apex just right of x = 0.5 at y = 1 (by far less than half an ulp);
+    // the other face stands in the plane x = 0.5, above y = 1, its edge
+    // through (0.5, 1, 0)
+    const Kernel::FT x = Kernel::FT(0.5) + Kernel::FT(std::ldexp(1.0, -60)) / Kernel::FT(3);
+    Mesh m = mesh_of({Point(0, 0, 0), Point(1, 0, 0), Point(x, Kernel::FT(1), Kernel::FT(0)), Point(0.5, 1, -1),
+                      Point(0.5, 1, 1), Point(0.5, 2, 0)},
+                     {{0, 1, 2}, {3, 4, 5}});
+    LocalIndex index(m);
+    REQUIRE(index.intersections({face_descriptor(0)}).empty());
+    const vertex_descriptor v(2);
+    REQUIRE(approx_point3d(m.point(v))[0] == 0.5);
+    CHECK_FALSE(round_if_unchanged(m, index, v, cos_cap, cos_needle));
+    CHECK(m.point(v).x() == x);
+    CHECK(index.intersections({face_descriptor(0)}).empty());
+  }
+  SECTION("elsewhere it takes its nearest doubles, and the index follows") {
+    const Kernel::FT third = Kernel::FT(1) / Kernel::FT(3);
+    Mesh m = mesh_of({Point(0, 0, 0), Point(1, 0, 0), Point(third, Kernel::FT(1), third)}, {{0, 1, 2}});
+    LocalIndex index(m);
+    const vertex_descriptor v(2);
+    CHECK(round_if_unchanged(m, index, v, cos_cap, cos_needle));
+    CHECK(m.point(v) == Point(1.0 / 3.0, 1, 1.0 / 3.0));
+    CHECK_FALSE(round_if_unchanged(m, index, v, cos_cap, cos_needle));  // already doubles
+  }
 }

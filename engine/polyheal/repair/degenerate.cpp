@@ -398,6 +398,19 @@ class Pipeline {
     note_size();
   }
 
+  /// Certify after rounding, early (ARCHITECTURE.md): each of a slice's
+  /// split points takes its written doubles now wherever that changes
+  /// nothing the oracle checks around it (detail::round_if_unchanged), so
+  /// that the exact tests after it run on doubles instead of the slices'
+  /// rationals. A point where it would stays exact (rounded at the end).
+  /// Returns the points moved.
+  std::size_t settle(const std::vector<vertex_descriptor>& points) {
+    std::size_t moved = 0;
+    for (vertex_descriptor v : points)
+      moved += !mesh_.is_removed(v) && detail::round_if_unchanged(mesh_, index_, v, cos_cap_, cos_needle_);
+    return moved;
+  }
+
   void finish_stats() {
     r_.collapses = decimator_.stats().collapses;
     r_.flips = decimator_.stats().flips;
@@ -437,6 +450,7 @@ class Pipeline {
     d.needle_angle = o.needle_angle;
     d.tolerance = r.tolerance;
     d.fold_angle = o.fold_angle;
+    d.fold_guard_angle = InspectOptions{}.tetgen_fold_angle;  // split points are rounded early (settle())
     return d;
   }
 
@@ -454,6 +468,7 @@ class Pipeline {
     index_.update(s.faces);
     decimator_.reattach(s.faces, s.parents);
     note_size();
+    r_.split_points_rounded += settle(s.vertices);
   }
 
   /// Decimation along a slice: its bad pieces first, then its split points

@@ -19,7 +19,11 @@
 //                   the paper does. By default the needles a slice leaves are
 //                   decimated right after it (the paper's §7 future work:
 //                   "decimating along the intersection curve after each
-//                   slicing"). No slice cuts a face that intersects another
+//                   slicing"). Right after a slice, its split points take
+//                   their nearest doubles wherever that changes nothing the
+//                   oracle checks around them (certify after rounding, early:
+//                   the decimation then runs on doubles, not rationals); the
+//                   others stay exact. No slice cuts a face that intersects another
 //                   in the input (SliceOptions::frozen): nothing may touch an
 //                   intersection, so its pieces would only add pairs and
 //                   needles.
@@ -32,8 +36,9 @@
 //                   the written soup with the oracle: shapes, topology,
 //                   self-intersections, Hausdorff distance to the input.
 //
-// Nothing moves: vertices keep their exact input coordinates; slicing adds
-// points on the input surface; collapses keep the surviving vertex in place.
+// No input vertex moves: vertices keep their exact input coordinates; slicing
+// adds points on the input surface (some rounded to doubles at once, an ulp
+// away); collapses keep the surviving vertex in place.
 #pragma once
 
 #include <cstddef>
@@ -94,6 +99,7 @@ struct DegenerateReport {
   std::size_t needle_slices = 0, needle_slices_refused = 0;
   std::size_t wedge_tips = 0, wedge_cuts = 0;  // cut_wedge(): tips given a series of cuts, cuts made
   std::size_t collapses = 0, flips = 0;
+  std::size_t split_points_rounded = 0;  // slices' split points given their doubles early (settle)
   double seconds_preprocess = 0, seconds_zero_area = 0, seconds_slicing = 0, seconds_decimation = 0,
          seconds_certify = 0;
   // output, filled by certify() on the soup as written

@@ -82,7 +82,7 @@ struct ShapeDecimator::Impl {
                           "v:polyheal_approx", Point3d{std::nan(""), 0.0, 0.0}).first) {
     cos_cap = cos_degrees(o.cap_angle);
     cos_needle = cos_degrees(o.needle_angle);
-    cos_fold = cos_degrees(o.fold_angle);
+    cos_fold = cos_degrees(o.fold_angle > 0 ? o.fold_angle : o.fold_guard_angle);
     // Sampling can miss the farthest point by a little: decide at 70% of the
     // tolerance; the report states the Hausdorff distance actually measured.
     tol2 = 0.49 * o.tolerance * o.tolerance;
@@ -172,7 +172,7 @@ struct ShapeDecimator::Impl {
     const bool fewer = bad_after < bad_before && (!plan.flip || o.fold_angle > 0);
     const bool better = plan.simplify ? bad_after == 0 && bad_before == 0 : worst > before || fewer;
     if (!better) return false;
-    if (o.fold_angle > 0 && creates_fold(plan)) return false;
+    if ((o.fold_angle > 0 || o.fold_guard_angle > 0) && creates_fold(plan)) return false;
     plan.worst = worst;
     return true;  // the costlier tolerance and intersection tests: choose(), best first
   }
@@ -517,5 +517,33 @@ void ShapeDecimator::reattach(const std::vector<face_descriptor>& faces, const s
 }
 bool ShapeDecimator::is_bad(face_descriptor f) const { return impl_->is_bad(f); }
 const DecimationStats& ShapeDecimator::stats() const { return impl_->stats; }
+
+bool round_if_unchanged(Mesh& mesh, LocalIndex& index, vertex_descriptor v, double cos_cap, double cos_needle) {
+  if (mesh.is_isolated(v)) return false;
+  const Point p = mesh.point(v);
+  const Point3d d = approx_point3d(p);  // the nearest doubles
+  const Point q(d[0], d[1], d[2]);
+  if (q == p) return false;
+  std::vector<std::array<vertex_descriptor, 3>> proposed;
+  std::vector<face_descriptor> around;
+  for (halfedge_descriptor h : CGAL::halfedges_around_target(mesh.halfedge(v), mesh)) {
+    const face_descriptor f = mesh.face(h);
+    if (f == Mesh::null_face()) continue;
+    const vertex_descriptor b = mesh.target(mesh.next(h)), c = mesh.source(h);
+    const Point &pb = mesh.point(b), &pc = mesh.point(c);
+    const Shape after = classify_triangle(q, pb, pc, cos_cap, cos_needle);
+    if (after != Shape::fine && after != classify_triangle(p, pb, pc, cos_cap, cos_needle)) return false;
+    if (!normals_agree(p, pb, pc, q, pb, pc)) return false;
+    around.push_back(f);
+    proposed.push_back({v, b, c});
+  }
+  mesh.point(v) = q;  // would_intersect asks about the current positions
+  if (index.would_intersect(proposed, around)) {
+    mesh.point(v) = p;
+    return false;
+  }
+  index.update(around);
+  return true;
+}
 
 }  // namespace polyheal::detail

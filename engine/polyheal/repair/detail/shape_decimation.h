@@ -57,6 +57,12 @@ struct DecimationOptions {
   /// too, and no operation may fold two faces that far (TetGen's "nearly
   /// self-intersecting facets", 0.1 degrees by default).
   double fold_angle = 0.0;
+  /// Degrees; > 0: no operation may fold a new triangle onto a neighbour
+  /// below it (folded faces are not bad for it). Where points were rounded
+  /// to doubles early, a region that was exactly planar is lifted by an
+  /// ulp, and a triangle folded back onto its neighbour no longer overlaps
+  /// it exactly (no intersection stops it) — a spike TetGen refuses.
+  double fold_guard_angle = 0.0;
 };
 
 struct DecimationStats {
@@ -94,5 +100,14 @@ class ShapeDecimator {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// Moves vertex v to the nearest doubles of its exact coordinates when that
+/// changes nothing the oracle checks around it, decided exactly: no face
+/// around it turns over (normals keep a positive dot product), none becomes
+/// degenerate, a cap or a needle unless it was one already (cos_cap,
+/// cos_needle: classify_triangle's thresholds), and none meets another face
+/// (`index`, which is updated). Returns whether it moved (false too when v
+/// is a double point already).
+bool round_if_unchanged(Mesh& mesh, LocalIndex& index, vertex_descriptor v, double cos_cap, double cos_needle);
 
 }  // namespace polyheal::detail
