@@ -295,31 +295,15 @@ class Bvh {
   /// candidate (`best`, the squared distance to triangle `index`) to prune
   /// with: the candidate is returned unless a triangle is strictly nearer.
   std::pair<double, std::size_t> nearest(const V3& p, double best, std::size_t index) const {
-    if (nodes_.empty()) return {best, index};
-    std::uint32_t last = std::numeric_limits<std::uint32_t>::max();
-    // The median split keeps the tree balanced: depth <= log2(entries) + 1,
-    // and the stack holds at most one sibling per level.
-    std::array<std::uint32_t, 128> stack;
-    std::size_t top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-      const Node& n = nodes_[stack[--top]];
-      if (box_distance2(n.box, p) >= best) continue;
-      if (n.leaf) {
-        for (std::uint32_t i = n.a; i < n.a + n.b; ++i) {
-          const Entry& e = entries_[i];
-          if (e.triangle == last || box_distance2(e.box, p) >= best) continue;
-          last = e.triangle;  // a triangle's pieces lie side by side
-          const double d = distance2(p, e.triangle);
-          if (d < best) {
-            best = d;
-            index = e.triangle;
-          }
-        }
-        continue;
-      }
-      push_children(n, p, stack, top);
-    }
+    nearest_first(p, [&](double box2) { return box2 >= best; },
+                  [&](std::uint32_t t) {
+                    const double d = distance2(p, t);
+                    if (d < best) {
+                      best = d;
+                      index = t;
+                    }
+                    return false;
+                  });
     return {best, index};
   }
 
@@ -327,30 +311,15 @@ class Bvh {
   /// `found` is set to it. (Boxes are pruned with a relative slack of 1e-12,
   /// so rounding in a box's distance never hides a triangle within r2.)
   bool any_within(const V3& p, double r2, std::size_t& found) const {
-    if (nodes_.empty()) return false;
     const double prune = r2 * (1 + 1e-12);
-    std::uint32_t last = std::numeric_limits<std::uint32_t>::max();
-    std::array<std::uint32_t, 128> stack;
-    std::size_t top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-      const Node& n = nodes_[stack[--top]];
-      if (box_distance2(n.box, p) > prune) continue;
-      if (n.leaf) {
-        for (std::uint32_t i = n.a; i < n.a + n.b; ++i) {
-          const Entry& e = entries_[i];
-          if (e.triangle == last || box_distance2(e.box, p) > prune) continue;
-          last = e.triangle;
-          if (distance2(p, e.triangle) <= r2) {
-            found = e.triangle;
-            return true;
-          }
-        }
-        continue;
-      }
-      push_children(n, p, stack, top);
-    }
-    return false;
+    bool hit = false;
+    nearest_first(p, [&](double box2) { return box2 > prune; },
+                  [&](std::uint32_t t) {
+                    if (distance2(p, t) > r2) return false;
+                    found = t;
+                    return hit = true;
+                  });
+    return hit;
   }
 
   /// The triangles with a piece whose box meets [lo, hi], each once, in increasing order.
@@ -395,11 +364,35 @@ class Bvh {
     bool leaf = false;
   };
 
-  /// Pushes an inner node's children, the nearer to p last (visited first).
-  void push_children(const Node& n, const V3& p, std::array<std::uint32_t, 128>& stack, std::size_t& top) const {
-    const bool left_first = box_distance2(nodes_[n.a].box, p) < box_distance2(nodes_[n.b].box, p);
-    stack[top++] = left_first ? n.b : n.a;
-    stack[top++] = left_first ? n.a : n.b;
+  /// Depth first from the root, the nearer child first: skips a node or a
+  /// piece when far(squared distance from p to its box) says so, and hands
+  /// each triangle of the pieces left to visit(triangle) — once per run of
+  /// its pieces, which lie side by side — until visit returns true.
+  template <class Far, class Visit>
+  void nearest_first(const V3& p, Far far, Visit visit) const {
+    if (nodes_.empty()) return;
+    std::uint32_t last = std::numeric_limits<std::uint32_t>::max();
+    // The median split keeps the tree balanced: depth <= log2(entries) + 1,
+    // and the stack holds at most one sibling per level.
+    std::array<std::uint32_t, 128> stack;
+    std::size_t top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& n = nodes_[stack[--top]];
+      if (far(box_distance2(n.box, p))) continue;
+      if (!n.leaf) {
+        const bool left_first = box_distance2(nodes_[n.a].box, p) < box_distance2(nodes_[n.b].box, p);
+        stack[top++] = left_first ? n.b : n.a;
+        stack[top++] = left_first ? n.a : n.b;
+        continue;
+      }
+      for (std::uint32_t i = n.a; i < n.a + n.b; ++i) {
+        const Entry& e = entries_[i];
+        if (e.triangle == last || far(box_distance2(e.box, p))) continue;
+        last = e.triangle;
+        if (visit(e.triangle)) return;
+      }
+    }
   }
   static double longest2(const V3& a, const V3& b, const V3& c) {
     return std::max({dot(b - a, b - a), dot(c - b, c - b), dot(a - c, a - c)});
