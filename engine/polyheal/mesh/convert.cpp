@@ -223,6 +223,11 @@ double nearest_double(const Kernel::FT& x) {
 
 Point3d nearest_point3d(const Point& p) { return {nearest_double(p.x()), nearest_double(p.y()), nearest_double(p.z())}; }
 
+Point nearest_double_point(const Point& p) {
+  const Point3d d = nearest_point3d(p);
+  return Point(d[0], d[1], d[2]);
+}
+
 Point3d approx_point3d(const Point& p) { return nearest_point3d(p); }
 
 }  // namespace polyheal

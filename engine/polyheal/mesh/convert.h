@@ -56,6 +56,9 @@ bool copies_share_edge(const Mesh& mesh, const std::optional<VertexIdentityMap>&
 
 /// p with each exact coordinate rounded to the nearest double (ties to even).
 Point3d nearest_point3d(const Point& p);
+/// The same, as an exact point (with double coordinates): the position a
+/// vertex takes when it is rounded in the working mesh.
+Point nearest_double_point(const Point& p);
 /// One exact number rounded to the nearest double (ties to even).
 double nearest_double(const Kernel::FT& x);
 

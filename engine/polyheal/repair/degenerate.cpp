@@ -22,11 +22,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-Point rounded(const Point& p) {
-  const Point3d d = approx_point3d(p);
-  return Point(d[0], d[1], d[2]);
-}
-
 ShapeCounts shape_counts(const Report& r) { return {r.degenerate_faces.size(), r.caps.size(), r.needles.size()}; }
 
 InspectOptions inspect_options(const DegenerateOptions& o) {
@@ -213,8 +208,8 @@ class Pipeline {
       // Where exactly the cut runs does not matter, so the plane is put
       // through double approximations: its split points stay one exact
       // construction deep instead of nesting rationals slice after slice.
-      const Point p = rounded(mesh_.point(mesh_.source(longest)));
-      const Point q = rounded(mesh_.point(mesh_.target(longest)));
+      const Point p = nearest_double_point(mesh_.point(mesh_.source(longest)));
+      const Point q = nearest_double_point(mesh_.point(mesh_.target(longest)));
       const Point mid(CGAL::to_double(CGAL::midpoint(p, q).x()), CGAL::to_double(CGAL::midpoint(p, q).y()),
                       CGAL::to_double(CGAL::midpoint(p, q).z()));
       if (p == q) continue;
@@ -303,7 +298,7 @@ class Pipeline {
     if (cuts < 1 || cuts > 48) return 0;
     // The planes go through double points (as slice_needles' do), keeping
     // split points one exact construction deep.
-    const Point pa = rounded(mesh_.point(a)), pb = rounded(mesh_.point(b));
+    const Point pa = nearest_double_point(mesh_.point(a)), pb = nearest_double_point(mesh_.point(b));
     const Kernel::Vector_3 axis = pb - pa;
     const Point3d da = approx_point3d(pa), db = approx_point3d(pb);
     std::vector<face_descriptor> faces;

@@ -31,13 +31,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-/// The nearest double point to an exact construction: the position a vertex
-/// is proposed to move to (see the rounding policy in deintersect.h).
-Point rounded(const Point& p) {
-  const Point3d d = approx_point3d(p);
-  return Point(d[0], d[1], d[2]);
-}
-
 Point3d sub(const Point3d& a, const Point3d& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
 double dot(const Point3d& a, const Point3d& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 Point3d cross(const Point3d& a, const Point3d& b) {
@@ -492,7 +485,7 @@ class Deintersector {
     auto move_to = [&](const Point& p) {
       Op op;
       op.kind = OpKind::hammer;
-      op.moves = {{a, rounded(p)}};
+      op.moves = {{a, nearest_double_point(p)}};
       if (op.moves[0].second != pa) ops.push_back(op);
     };
     auto average = [](const std::vector<Point>& ps) {
@@ -700,7 +693,7 @@ class Deintersector {
     std::optional<Point> best;
     double best_shift = 0;
     for (const Point& p : to) {
-      const Point q = rounded(p);
+      const Point q = nearest_double_point(p);
       const double shift = length(sub(approx_point3d(q), p3(v)));
       if (length(sub(approx_point3d(q), original_[v])) > r_.max_displacement_allowed || q == mesh_.point(v)) continue;
       if (!best || shift < best_shift) best = q, best_shift = shift;

@@ -521,8 +521,7 @@ const DecimationStats& ShapeDecimator::stats() const { return impl_->stats; }
 bool round_if_unchanged(Mesh& mesh, LocalIndex& index, vertex_descriptor v, double cos_cap, double cos_needle) {
   if (mesh.is_isolated(v)) return false;
   const Point p = mesh.point(v);
-  const Point3d d = approx_point3d(p);  // the nearest doubles
-  const Point q(d[0], d[1], d[2]);
+  const Point q = nearest_double_point(p);
   if (q == p) return false;
   std::vector<std::array<vertex_descriptor, 3>> proposed;
   std::vector<face_descriptor> around;
