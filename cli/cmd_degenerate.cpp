@@ -63,6 +63,7 @@ nlohmann::json to_json(const DegenerateArgs& a, const DegenerateReport& r, doubl
         {"wedge_cuts", r.wedge_cuts},
         {"collapses", r.collapses},
         {"flips", r.flips},
+        {"removals", r.removals},
         {"split_points_rounded", r.split_points_rounded}}},
       {"topology", {{"input", topology_json(r.topology_in)}, {"output", topology_json(r.topology_out)}}},
       {"self_intersecting_pairs", {{"input", r.self_intersections_in}, {"output", r.self_intersections_out}}},
@@ -94,10 +95,11 @@ void print_text(const DegenerateArgs& a, const DegenerateReport& r) {
               r.faces_in, r.repeated_index_faces, r.faces_after_zero_area, r.faces_after_slicing, r.peak_faces,
               r.faces_out);
   std::printf("  slices: %zu grid (%zu refused), %zu cap (%zu refused, %s%s), %zu needle (%zu refused), "
-              "%zu across %zu wedge tips; %zu collapses, %zu flips; %zu split points rounded early\n",
+              "%zu across %zu wedge tips; %zu collapses, %zu flips, %zu removals; %zu split points rounded early\n",
               r.grid_slices, r.grid_slices_refused, r.cap_slices, r.cap_slices_refused,
               r.global_slices ? "global" : "local", r.interleave ? ", interleaved" : "", r.needle_slices,
-              r.needle_slices_refused, r.wedge_cuts, r.wedge_tips, r.collapses, r.flips, r.split_points_rounded);
+              r.needle_slices_refused, r.wedge_cuts, r.wedge_tips, r.collapses, r.flips, r.removals,
+              r.split_points_rounded);
   std::printf("  after:  %s\n", counts(r.after).c_str());
   std::printf("  topology: euler %ld -> %ld, components %zu -> %zu, boundary loops %zu -> %zu%s\n", r.topology_in.euler,
               r.topology_out.euler, r.topology_in.components, r.topology_out.components, r.topology_in.boundary_loops,

@@ -30,8 +30,13 @@
 //   4. decimation   needles and whatever slicing could not remove go by
 //                   collapses and flips within the tolerance (§5). A needle
 //                   no operation can remove (the side of a thin strip) gets
-//                   local supersampling: a slice across it through the
-//                   midpoint of its longest edge, then decimation again.
+//                   local supersampling: slices across its longest edge,
+//                   into the fewest equal pieces that clear the needle angle
+//                   (halves unless a strip needs more), then decimation
+//                   again. Needles still stuck get the rounds again with
+//                   vertex removal (the hole triangulated anew) added to the
+//                   decimation; the last pass removes split points that way
+//                   too wherever every face stays fine.
 //   5. certify      the exact mesh is rounded to doubles; certify() checks
 //                   the written soup with the oracle: shapes, topology,
 //                   self-intersections, Hausdorff distance to the input.
@@ -99,6 +104,7 @@ struct DegenerateReport {
   std::size_t needle_slices = 0, needle_slices_refused = 0;
   std::size_t wedge_tips = 0, wedge_cuts = 0;  // cut_wedge(): tips given a series of cuts, cuts made
   std::size_t collapses = 0, flips = 0;
+  std::size_t removals = 0;  // split points (and, when stuck, any vertex) removed with the hole triangulated anew
   std::size_t split_points_rounded = 0;  // slices' split points given their doubles early (settle)
   double seconds_preprocess = 0, seconds_zero_area = 0, seconds_slicing = 0, seconds_decimation = 0,
          seconds_certify = 0;

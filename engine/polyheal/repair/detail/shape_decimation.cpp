@@ -60,6 +60,10 @@ struct ShapeDecimator::Impl {
     std::vector<face_descriptor> replaced;  // faces removed or reshaped
     double worst = -1.0;            // the worst quality among `proposed`
     bool simplify = false;          // removing a vertex only where every new face is fine
+    /// Removal of h's source with its hole retriangulated by `diagonals`
+    /// (not a collapse: the new faces need not share a corner).
+    bool removal = false;
+    std::vector<std::pair<vertex_descriptor, vertex_descriptor>> diagonals;
   };
 
   FaceFlagMap on_input;
@@ -67,6 +71,7 @@ struct ShapeDecimator::Impl {
   std::optional<VertexIdentityMap> identity;                          // kVertexIdentity, if present
   PinchCopies copies;  // pinch identity -> its copies
   std::vector<char> sticky;  // by vertex index: split points of the slice being tidied
+  bool retriangulate = false;  // best_plan() may remove a vertex and triangulate its hole (plan_removal())
   bool is_sticky(vertex_descriptor v) const {
     return static_cast<std::size_t>(v) < sticky.size() && sticky[static_cast<std::size_t>(v)];
   }
@@ -177,38 +182,43 @@ struct ShapeDecimator::Impl {
     return true;  // the costlier tolerance and intersection tests: choose(), best first
   }
 
+  /// Samples of triangle t near the input surface. "Within the tolerance"
+  /// needs one input triangle close enough, not the nearest: the search
+  /// stops at the first (`last`, the one found before, is tried first:
+  /// neighbouring samples share it).
+  bool near_input(const Triple& t, std::size_t& last) const {
+    // Every vertex lies on the input surface, so a triangle no longer than
+    // the tolerance is within it everywhere; longer ones are sampled.
+    double longest2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const Point3d d = approx(t[k]) - approx(t[(k + 1) % 3]);
+      longest2 = std::max(longest2, dot(d, d));
+    }
+    if (longest2 <= tol2) return true;
+    const int steps = std::min(6, 1 + static_cast<int>(std::sqrt(longest2 / tol2)));
+    const std::array<Point3d, 3> corner{approx(t[0]), approx(t[1]), approx(t[2])};
+    bool ok = true;
+    for_each_sample(t, steps, [&](const Point3d& p) {
+      if (!ok) return;
+      // The corners lie on the input: a sample within the tolerance of one
+      // needs no search.
+      for (const Point3d& c : corner) {
+        const Point3d d = p - c;
+        if (dot(d, d) <= tol2) return;
+      }
+      if (!input.any_within(p, tol2, last)) ok = false;
+    });
+    return ok;
+  }
+
   /// Output -> input: samples of each new triangle near the input surface.
   /// Input -> output: vertices removed so far, attached to replaced faces,
   /// (and a collapse's own removed vertex) near the new triangles.
   bool within_tolerance(const Plan& plan) const {
     bool ok = true;
-    // "Within the tolerance" needs one input triangle close enough, not the
-    // nearest: the search stops at the first (the last one found is tried
-    // first: neighbouring samples share it).
     std::size_t last = std::numeric_limits<std::size_t>::max();
-    for (const Triple& t : plan.proposed) {
-      // Every vertex lies on the input surface, so a triangle no longer than
-      // the tolerance is within it everywhere; longer ones are sampled.
-      double longest2 = 0;
-      for (int k = 0; k < 3; ++k) {
-        const Point3d d = approx(t[k]) - approx(t[(k + 1) % 3]);
-        longest2 = std::max(longest2, dot(d, d));
-      }
-      if (longest2 <= tol2) continue;
-      const int steps = std::min(6, 1 + static_cast<int>(std::sqrt(longest2 / tol2)));
-      const std::array<Point3d, 3> corner{approx(t[0]), approx(t[1]), approx(t[2])};
-      for_each_sample(t, steps, [&](const Point3d& p) {
-        if (!ok) return;
-        // The corners lie on the input: a sample within the tolerance of one
-        // needs no search.
-        for (const Point3d& c : corner) {
-          const Point3d d = p - c;
-          if (dot(d, d) <= tol2) return;
-        }
-        if (!input.any_within(p, tol2, last)) ok = false;
-      });
-      if (!ok) return false;
-    }
+    for (const Triple& t : plan.proposed)
+      if (!near_input(t, last)) return false;
     // With folds (fold_angle), a displaced point may be covered by a face
     // the operation keeps: a fold's spike lies on the face it is folded
     // onto. Not otherwise: on the corpus's self-overlapping mpi_and_sphere
@@ -353,6 +363,95 @@ struct ShapeDecimator::Impl {
     return acceptable(plan);
   }
 
+  /// Removal of interior vertex u, its hole (the polygon of its neighbours)
+  /// retriangulated for the best worst shape (dynamic programming over the
+  /// polygon's triangulations, on double qualities: ordering only; the plan
+  /// is then checked exactly like any other). A collapse is the special case
+  /// of a fan from one neighbour; the best triangulation may be no fan: a split
+  /// point between two others along a CAD cylinder's facet edge is removed
+  /// only by joining points across both facets beside it.
+  bool plan_removal(vertex_descriptor u, Plan& plan, bool simplify) const {
+    if (pinned && (*pinned)[u]) return false;
+    if (CGAL::is_border(u, mesh)) return false;
+    // the hole's boundary, in the faces' orientation: face (u, a, b) gives a -> b
+    const halfedge_descriptor out = mesh.opposite(mesh.halfedge(u));  // u -> ring[0]
+    std::vector<vertex_descriptor> ring;
+    std::vector<face_descriptor> replaced;
+    for (halfedge_descriptor g : CGAL::halfedges_around_source(out, mesh)) {
+      replaced.push_back(mesh.face(g));
+      ring.push_back(mesh.target(g));
+    }
+    const std::size_t n = ring.size();
+    if (n < 4 || n > 12) return false;
+    if (ring[1] != mesh.target(mesh.next(out))) std::reverse(ring.begin() + 1, ring.end());
+    std::vector<char> allowed(n * n, 1);  // chord (i, j) may be added
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = i + 2; j < n; ++j) {
+        if (i == 0 && j == n - 1) continue;  // a side of the hole
+        const bool ok = !CGAL::halfedge(ring[i], ring[j], mesh).second && !joins_copies(ring[i], {ring[j]});
+        allowed[i * n + j] = ok;
+      }
+    // best[i][j]: the best worst quality triangulating ring[i..j] (j > i + 1).
+    // A triangle off the input surface (one across a crease, or across a
+    // curved part's facets) is forbidden and the triangulation chosen again,
+    // up to four times: the best shape is often the one across.
+    std::vector<std::array<std::size_t, 3>> forbidden;
+    std::vector<double> best(n * n);
+    std::vector<int> cut(n * n);
+    std::vector<std::array<std::size_t, 3>> tris;
+    std::size_t last = std::numeric_limits<std::size_t>::max();
+    for (int attempt = 0;; ++attempt) {
+      if (attempt == 4) return false;
+      std::fill(best.begin(), best.end(), 180.0);
+      std::fill(cut.begin(), cut.end(), -1);
+      for (std::size_t len = 2; len < n; ++len)
+        for (std::size_t i = 0; i + len < n; ++i) {
+          const std::size_t j = i + len;
+          best[i * n + j] = -1;
+          if (!(i == 0 && j == n - 1) && !allowed[i * n + j]) continue;
+          for (std::size_t k = i + 1; k < j; ++k) {
+            const double left = k > i + 1 ? best[i * n + k] : 180.0, right = j > k + 1 ? best[k * n + j] : 180.0;
+            if (std::find(forbidden.begin(), forbidden.end(), std::array<std::size_t, 3>{i, k, j}) != forbidden.end())
+              continue;
+            const double q = std::min({left, right, quality(approx(ring[i]), approx(ring[k]), approx(ring[j]))});
+            if (q > best[i * n + j]) {
+              best[i * n + j] = q;
+              cut[i * n + j] = static_cast<int>(k);
+            }
+          }
+        }
+      if (cut[n - 1] < 0 || best[n - 1] < 0) return false;
+      tris.clear();
+      std::vector<std::pair<std::size_t, std::size_t>> todo{{0, n - 1}};
+      while (!todo.empty()) {
+        const auto [i, j] = todo.back();
+        todo.pop_back();
+        const std::size_t k = static_cast<std::size_t>(cut[i * n + j]);
+        tris.push_back({i, k, j});
+        if (k > i + 1) todo.emplace_back(i, k);
+        if (j > k + 1) todo.emplace_back(k, j);
+      }
+      const std::size_t before = forbidden.size();
+      for (const auto& t : tris)
+        if (!near_input({ring[t[0]], ring[t[1]], ring[t[2]]}, last)) forbidden.push_back(t);
+      if (forbidden.size() == before) break;
+    }
+    plan = Plan{};
+    plan.removal = true;
+    plan.simplify = simplify;
+    plan.h = out;  // source: u
+    plan.replaced = replaced;
+    for (const auto& t : tris) {
+      plan.proposed.push_back({ring[t[0]], ring[t[1]], ring[t[2]]});
+      if (t[1] > t[0] + 1) plan.diagonals.emplace_back(ring[t[0]], ring[t[1]]);
+      if (t[2] > t[1] + 1) plan.diagonals.emplace_back(ring[t[1]], ring[t[2]]);
+    }
+    for (const Triple& t : plan.proposed)
+      for (face_descriptor f : replaced)
+        if (!same_side(corners(f), t)) return false;
+    return acceptable(plan);
+  }
+
   /// The best valid operation removing bad face f, if any.
   bool best_plan(face_descriptor f, Plan& best) const {
     std::array<halfedge_descriptor, 3> hs;
@@ -383,6 +482,11 @@ struct ShapeDecimator::Impl {
       if (plan_collapse(mesh.opposite(hs[k]), plan)) candidates.push_back(plan);
     }
     if (plan_flip(hs[order[2]], plan)) candidates.push_back(plan);  // flip the longest (caps, collinear faces)
+    if (retriangulate)
+      for (int k = 0; k < 3; ++k) {
+        const vertex_descriptor u = mesh.target(hs[k]);
+        if (plan_removal(u, plan, is_sticky(u))) candidates.push_back(plan);
+      }
     return choose(candidates, best);
   }
 
@@ -415,6 +519,35 @@ struct ShapeDecimator::Impl {
       changed = plan.replaced;
       for (face_descriptor f : changed) on_input[f] = 0;
       ++stats.flips;
+    } else if (plan.removal) {
+      // the hole as one face (it keeps the face's properties), then cut by the diagonals
+      const halfedge_descriptor hole = CGAL::Euler::remove_center_vertex(mesh.opposite(plan.h), mesh);
+      const face_descriptor merged = mesh.face(hole);
+      on_input[merged] = 0;
+      const std::optional<FaceOriginMap> origin = face_origin_map(mesh);
+      for (const auto& [a, b] : plan.diagonals) {
+        halfedge_descriptor ha, hb;
+        for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh.halfedge(a), mesh)) {
+          if (mesh.is_border(g)) continue;
+          hb = halfedge_descriptor();
+          for (halfedge_descriptor k : CGAL::halfedges_around_face(g, mesh))
+            if (mesh.target(k) == b) hb = k;
+          if (hb != halfedge_descriptor()) {
+            ha = g;
+            break;
+          }
+        }
+        const halfedge_descriptor d = CGAL::Euler::split_face(ha, hb, mesh);
+        const face_descriptor piece = mesh.face(mesh.opposite(d));
+        on_input[piece] = 0;
+        if (origin) (*origin)[piece] = (*origin)[mesh.face(d)];
+      }
+      for (vertex_descriptor w : CGAL::vertices_around_face(hole, mesh))
+        for (face_descriptor f : CGAL::faces_around_target(mesh.halfedge(w), mesh))
+          if (f != Mesh::null_face()) changed.push_back(f);
+      std::sort(changed.begin(), changed.end());
+      changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+      ++stats.removals;
     } else {
       for (face_descriptor f : plan.replaced) on_input[f] = 0;  // the two that vanish do not matter
       const Point keep = mesh.point(mesh.target(plan.h));
@@ -471,13 +604,14 @@ struct ShapeDecimator::Impl {
   /// Removes vertices (a slice's split points) wherever a collapse leaves
   /// only fine faces, within the tolerance — the paper's §7 "decimating along
   /// the intersection curve after each slicing".
-  void simplify(const std::vector<vertex_descriptor>& vertices) {
+  void simplify(const std::vector<vertex_descriptor>& vertices, bool removals) {
     for (vertex_descriptor x : vertices) {
       if (mesh.is_removed(x) || mesh.is_isolated(x)) continue;
       std::vector<Plan> candidates;
       Plan plan, best;
       for (halfedge_descriptor h : CGAL::halfedges_around_source(x, mesh))
         if (plan_collapse(h, plan, true)) candidates.push_back(plan);
+      if ((removals || retriangulate) && plan_removal(x, plan, true)) candidates.push_back(plan);
       if (choose(candidates, best)) apply(best);
     }
   }
@@ -511,10 +645,13 @@ void ShapeDecimator::run(const std::vector<face_descriptor>& faces, const std::v
   impl_->run(faces);
   impl_->sticky.clear();
 }
-void ShapeDecimator::simplify(const std::vector<vertex_descriptor>& vertices) { impl_->simplify(vertices); }
+void ShapeDecimator::simplify(const std::vector<vertex_descriptor>& vertices, bool retriangulate) {
+  impl_->simplify(vertices, retriangulate);
+}
 void ShapeDecimator::reattach(const std::vector<face_descriptor>& faces, const std::vector<face_descriptor>& parents) {
   impl_->reattach(faces, parents);
 }
+void ShapeDecimator::set_retriangulate(bool on) { impl_->retriangulate = on; }
 bool ShapeDecimator::is_bad(face_descriptor f) const { return impl_->is_bad(f); }
 const DecimationStats& ShapeDecimator::stats() const { return impl_->stats; }
 

@@ -68,6 +68,7 @@ struct DecimationOptions {
 struct DecimationStats {
   std::size_t collapses = 0;
   std::size_t flips = 0;
+  std::size_t removals = 0;  // vertices removed with their hole triangulated anew (set_retriangulate())
 };
 
 class ShapeDecimator {
@@ -85,13 +86,19 @@ class ShapeDecimator {
 
   /// Collapses away each of `vertices` (a slice's split points) where that
   /// leaves only fine faces within the tolerance (paper §7: "decimating along
-  /// the intersection curve after each slicing").
-  void simplify(const std::vector<vertex_descriptor>& vertices);
+  /// the intersection curve after each slicing"). With `retriangulate`, a
+  /// point may also be removed with its hole triangulated anew for the best
+  /// worst shape (not a fan from one neighbour: a collapse).
+  void simplify(const std::vector<vertex_descriptor>& vertices, bool retriangulate = false);
 
   /// After a slice cut each of `parents` into the faces beside it in
   /// `faces` (a face may be its own parent): the points attached to a parent
   /// are re-attached to the nearest of its pieces.
   void reattach(const std::vector<face_descriptor>& faces, const std::vector<face_descriptor>& parents);
+
+  /// Whether run() and simplify() may also remove a vertex with its hole
+  /// triangulated anew for the best worst shape (off by default).
+  void set_retriangulate(bool on);
 
   bool is_bad(face_descriptor f) const;
   const DecimationStats& stats() const;
