@@ -467,6 +467,8 @@ class Pipeline {
       std::sort(r.begin(), r.end());
       return r;
     };
+    // this last pass may also remove a point with its hole triangulated anew
+    retriangulate();
     std::vector<vertex_descriptor> todo;  // in the order the slices made them, once each
     std::vector<char> seen(mesh_.number_of_vertices() + mesh_.number_of_removed_vertices(), 0);
     for (vertex_descriptor v : created_)
@@ -478,7 +480,7 @@ class Pipeline {
       std::vector<std::vector<std::uint32_t>> rings;
       for (vertex_descriptor v : todo) rings.push_back(ring(v));
       const std::size_t before = mesh_.number_of_faces();
-      decimator_.simplify(todo, true);
+      decimator_.simplify(todo);
       if (mesh_.number_of_faces() == before) break;
       std::vector<vertex_descriptor> next;
       for (std::size_t i = 0; i < todo.size(); ++i)

@@ -604,14 +604,14 @@ struct ShapeDecimator::Impl {
   /// Removes vertices (a slice's split points) wherever a collapse leaves
   /// only fine faces, within the tolerance — the paper's §7 "decimating along
   /// the intersection curve after each slicing".
-  void simplify(const std::vector<vertex_descriptor>& vertices, bool removals) {
+  void simplify(const std::vector<vertex_descriptor>& vertices) {
     for (vertex_descriptor x : vertices) {
       if (mesh.is_removed(x) || mesh.is_isolated(x)) continue;
       std::vector<Plan> candidates;
       Plan plan, best;
       for (halfedge_descriptor h : CGAL::halfedges_around_source(x, mesh))
         if (plan_collapse(h, plan, true)) candidates.push_back(plan);
-      if ((removals || retriangulate) && plan_removal(x, plan, true)) candidates.push_back(plan);
+      if (retriangulate && plan_removal(x, plan, true)) candidates.push_back(plan);
       if (choose(candidates, best)) apply(best);
     }
   }
@@ -645,9 +645,7 @@ void ShapeDecimator::run(const std::vector<face_descriptor>& faces, const std::v
   impl_->run(faces);
   impl_->sticky.clear();
 }
-void ShapeDecimator::simplify(const std::vector<vertex_descriptor>& vertices, bool retriangulate) {
-  impl_->simplify(vertices, retriangulate);
-}
+void ShapeDecimator::simplify(const std::vector<vertex_descriptor>& vertices) { impl_->simplify(vertices); }
 void ShapeDecimator::reattach(const std::vector<face_descriptor>& faces, const std::vector<face_descriptor>& parents) {
   impl_->reattach(faces, parents);
 }

@@ -86,10 +86,9 @@ class ShapeDecimator {
 
   /// Collapses away each of `vertices` (a slice's split points) where that
   /// leaves only fine faces within the tolerance (paper §7: "decimating along
-  /// the intersection curve after each slicing"). With `retriangulate`, a
-  /// point may also be removed with its hole triangulated anew for the best
-  /// worst shape (not a fan from one neighbour: a collapse).
-  void simplify(const std::vector<vertex_descriptor>& vertices, bool retriangulate = false);
+  /// the intersection curve after each slicing"); with set_retriangulate(),
+  /// also by removing it with its hole triangulated anew.
+  void simplify(const std::vector<vertex_descriptor>& vertices);
 
   /// After a slice cut each of `parents` into the faces beside it in
   /// `faces` (a face may be its own parent): the points attached to a parent
