@@ -62,7 +62,7 @@ Soup coarse_plate(bool filled) {
   return s;
 }
 
-/// The surface triangle nearest p (planar_bound takes its plane).
+/// The surface triangle nearest p (cover_bound takes its plane).
 std::size_t nearest_triangle(const detail::SurfaceDistance& d, const Point3d& p) { return d.nearest(p).second; }
 
 }  // namespace
@@ -103,10 +103,9 @@ TEST_CASE("distance: a piece over a planar fan region is bounded by its height, 
           "[repair][distance]") {
   // One row per configuration: a triangle above the plate with the hole,
   // whether its projection lies in the plate (then the bound is its largest
-  // corner height plus the coplanarity offset), and why.
+  // corner height), and why.
   const Soup plate = plate_with_hole(200);
   const detail::SurfaceDistance d(plate);
-  const double offset = 1e-9;
   struct Row {
     std::array<Point3d, 3> piece;
     double bound;  // expected; infinity: must not be bounded
@@ -129,11 +128,17 @@ TEST_CASE("distance: a piece over a planar fan region is bounded by its height, 
     INFO(row.why);
     // The needle nearest the first corner gives the plane (any of the plate's would).
     const std::size_t t = nearest_triangle(d, {row.piece[0][0] + 1e-3, row.piece[0][1] + 1e-3, 0});
-    const double got = d.planar_bound(row.piece, t, offset);
+    const double got = d.cover_bound(row.piece, t, 1.0);
     if (row.bound == kNone) {
       CHECK(got == kNone);
     } else {
-      CHECK(got <= row.bound + offset + 1e-12);
+      // (plus twice the 1e-9-of-its-size margin at corners it allows for rounding)
+      double longest = 0;
+      for (int k = 0; k < 3; ++k) {
+        const Point3d &a = row.piece[k], &b = row.piece[(k + 1) % 3];
+        longest = std::max(longest, std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]));
+      }
+      CHECK(got <= row.bound + 2e-9 * longest + 1e-12);
       CHECK(got >= row.bound - 1e-12);
       // A true upper bound: no point of the piece is farther from the plate.
       for (double a = 0; a <= 1; a += 0.125)
@@ -146,7 +151,51 @@ TEST_CASE("distance: a piece over a planar fan region is bounded by its height, 
     }
   }
   // A limit below the bound gives up.
-  CHECK(d.planar_bound(rows[1].piece, nearest_triangle(d, {0.501, 0.201, 0}), offset, 0.02) == kNone);
+  CHECK(d.cover_bound(rows[1].piece, nearest_triangle(d, {0.501, 0.201, 0}), 0.02) == kNone);
+}
+
+TEST_CASE("distance: a chord across a curved strip surface is bounded by the gap, not split to one strip",
+          "[repair][distance]") {
+  // A cylinder patch of radius 10 around the x axis tessellated as CAD
+  // strips (40 facets of 0.01 rad, 10 long, each cut by its diagonal: 100:1
+  // needles), and pieces whose corners lie on it and span many strips, as
+  // an input facet does over a surface tessellated anew. No strip is near
+  // a whole piece and no plane holds them, so only the gap between the
+  // strips and the piece's plane over the piece bounds it; the bound must
+  // be a true one and close to the true largest distance.
+  const double R = 10;
+  Soup strips;
+  auto at = [&](double x, double angle) { return Point3d{x, R * std::sin(angle), R * std::cos(angle)}; };
+  for (int i = 0; i <= 40; ++i) {
+    strips.points.push_back(at(0, -0.2 + 0.01 * i));
+    strips.points.push_back(at(10, -0.2 + 0.01 * i));
+  }
+  for (Index i = 0; i < 40; ++i) {
+    strips.add_triangle(2 * i, 2 * i + 1, 2 * i + 3);
+    strips.add_triangle(2 * i, 2 * i + 3, 2 * i + 2);
+  }
+  const detail::SurfaceDistance d(strips);
+  const std::array<Point3d, 3> pieces[] = {
+      {at(1, -0.1), at(9, -0.05), at(5, 0.1)},      // across 20 strips
+      {at(0.5, -0.15), at(9.5, -0.149), at(5, -0.12)},  // a thin one along 3 strips
+  };
+  for (const auto& piece : pieces) {
+    double largest = 0;  // the true largest distance, sampled
+    for (double a = 0; a <= 1; a += 1.0 / 64)
+      for (double b = 0; a + b <= 1; b += 1.0 / 64) {
+        Point3d p;
+        for (int k = 0; k < 3; ++k) p[k] = piece[0][k] + a * (piece[1][k] - piece[0][k]) + b * (piece[2][k] - piece[0][k]);
+        largest = std::max(largest, std::sqrt(d.squared_distance(p)));
+      }
+    const std::size_t t = nearest_triangle(d, piece[0]);
+    const double got = d.cover_bound(piece, t, 1.0);
+    INFO("largest sampled " << largest << ", bound " << got);
+    CHECK(got >= largest - 1e-12);
+    // along the plane's normal rather than to the nearest point (up to
+    // 0.2 rad between them), and over strips of sagitta 1.25e-4
+    CHECK(got <= largest / std::cos(0.25) + 1.25e-4);
+    CHECK(d.cover_bound(piece, t, 0.5 * largest) == std::numeric_limits<double>::infinity());
+  }
 }
 
 TEST_CASE("distance: Hausdorff between fan and coarse tessellations of a plate sees the hole", "[repair][distance]") {

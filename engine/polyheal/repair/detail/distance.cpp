@@ -97,32 +97,93 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
     }
     return std::sqrt(bound);
   };
-  // How far from a plane a triangle may lie and still count as in it
-  // (planar_bound adds the offset to its bound).
-  const double planar_offset = error_bound / 64;
   double lower = 0.0;
-  // The corners' nearest triangles: one query per distinct corner (a
-  // vertex is a corner of ~6 triangles), in parallel (the tree is built and
-  // only read; its search structure is made by the first, serial, query).
+  // The corners' nearest triangles: one query per distinct corner that
+  // needs one (a vertex is a corner of ~6 triangles), in parallel (the
+  // index is built and only read).
   std::vector<Point3d> corners;
   corners.reserve(3 * from.size());
   for (const Corners& t : from) corners.insert(corners.end(), t.begin(), t.end());
   std::sort(corners.begin(), corners.end());
   corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+  auto index_of = [&](const Point3d& c) {
+    return static_cast<std::size_t>(std::lower_bound(corners.begin(), corners.end(), c) - corners.begin());
+  };
   std::vector<std::pair<double, std::size_t>> nearest(corners.size());
-  if (!corners.empty()) nearest[0] = to.nearest(corners[0]);
-  tbb::parallel_for(std::size_t(1), corners.size(), [&](std::size_t i) { nearest[i] = to.nearest(corners[i]); });
+  std::vector<char> known(corners.size(), 0);
+  auto query = [&](const std::vector<std::size_t>& which) {
+    tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t i) { nearest[which[i]] = to.nearest(corners[which[i]]); });
+    for (std::size_t i : which) known[i] = 1;
+  };
+  std::vector<const Corners*> todo;
+  todo.reserve(from.size());
+  if (!skip && !corners.empty()) {
+    // A first pass over one corner per cell of a grid (cells of four median
+    // longest edges): by the Lipschitz bound, every point of a triangle is
+    // within d(r) + |c - r| + its longest edge of `to`, for a corner c of it
+    // and the corner r that stands for c's cell. Triangles for which that
+    // stays within the distance the first pass found (plus the error bound)
+    // are done without a query of their own: most of a deep interior that
+    // a repair removed, whose distances are far above its triangles' size.
+    std::vector<double> longest(from.size());
+    for (std::size_t t = 0; t < from.size(); ++t)
+      longest[t] = std::max({norm(from[t][0], from[t][1]), norm(from[t][1], from[t][2]), norm(from[t][2], from[t][0])});
+    std::vector<double> sorted = longest;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+    const double cell = 4 * sorted[sorted.size() / 2];
+    std::vector<std::size_t> stand_in(corners.size());
+    std::vector<std::size_t> reps;
+    if (cell > 0) {
+      std::vector<std::pair<Point3d, std::size_t>> keyed(corners.size());
+      for (std::size_t i = 0; i < corners.size(); ++i)
+        keyed[i] = {{std::floor(corners[i][0] / cell), std::floor(corners[i][1] / cell), std::floor(corners[i][2] / cell)}, i};
+      std::sort(keyed.begin(), keyed.end());
+      for (std::size_t i = 0; i < keyed.size(); ++i) {
+        if (i == 0 || keyed[i].first != keyed[i - 1].first) reps.push_back(keyed[i].second);
+        stand_in[keyed[i].second] = reps.back();
+      }
+    } else {
+      for (std::size_t i = 0; i < corners.size(); ++i) stand_in[i] = i;
+      reps.resize(corners.size());
+      for (std::size_t i = 0; i < corners.size(); ++i) reps[i] = i;
+    }
+    query(reps);
+    for (std::size_t r : reps) lower = std::max(lower, std::sqrt(nearest[r].first));
+    std::vector<std::size_t> needed;
+    for (std::size_t t = 0; t < from.size(); ++t) {
+      double bound = std::numeric_limits<double>::infinity();
+      for (const Point3d& c : from[t]) {
+        const std::size_t r = stand_in[index_of(c)];
+        bound = std::min(bound, std::sqrt(nearest[r].first) + norm(c, corners[r]));
+      }
+      if (bound + longest[t] <= lower + error_bound) continue;
+      todo.push_back(&from[t]);
+      for (const Point3d& c : from[t]) {
+        const std::size_t i = index_of(c);
+        if (!known[i]) {
+          known[i] = 2;  // listed
+          needed.push_back(i);
+        }
+      }
+    }
+    query(needed);
+  } else {
+    for (const Corners& t : from) todo.push_back(&t);
+    std::vector<std::size_t> all(corners.size());
+    for (std::size_t i = 0; i < corners.size(); ++i) all[i] = i;
+    query(all);
+  }
   constexpr std::size_t kSkippedSplitBudget = 50000;
   std::size_t skipped_splits = 0;
   std::vector<char> skipped(corners.size(), 0);
   if (skip)
     tbb::parallel_for(std::size_t(0), corners.size(), [&](std::size_t i) { skipped[i] = (*skip)(corners[i]); });
   std::vector<Piece> stack;
-  for (const Corners& t : from) {
+  for (const Corners* t : todo) {
     Piece piece;
-    piece.p = t;
+    piece.p = *t;
     for (int k = 0; k < 3; ++k) {
-      const auto at = static_cast<std::size_t>(std::lower_bound(corners.begin(), corners.end(), t[k]) - corners.begin());
+      const std::size_t at = index_of((*t)[k]);
       const auto [d2, near] = nearest[at];
       piece.d[k] = std::sqrt(d2);
       piece.near[k] = near;
@@ -158,9 +219,14 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
       // 1-Lipschitz bound first (free), then the convexity bound
       if (*std::min_element(piece.d.begin(), piece.d.end()) + edge[k] <= bound + error_bound) continue;
       if (upper_bound(piece) <= bound + error_bound) continue;
-      // A piece over a planar region tessellated by thin triangles (a CAD
-      // fan): no one triangle is near all its corners, but the region is.
-      if (to.planar_bound(piece.p, piece.best, planar_offset, bound + error_bound) <= bound + error_bound) continue;
+      // A piece over a region tessellated by thin triangles (a CAD fan, or
+      // the same curved surface tessellated anew): no one triangle is near
+      // all its corners, but the region is. (Asked only of pieces longer
+      // than the distance sought: smaller ones are done by a few bisections,
+      // cheaper than a search of the region within that distance.)
+      if (edge[k] > bound + error_bound &&
+          to.cover_bound(piece.p, piece.best, bound + error_bound) <= bound + error_bound)
+        continue;
       const int i = (k + 1) % 3, j = (k + 2) % 3;  // the longest edge runs from corner i to corner j
       Point3d m;
       for (int c = 0; c < 3; ++c) m[c] = 0.5 * (piece.p[i][c] + piece.p[j][c]);
@@ -570,10 +636,13 @@ bool strictly_inside(const V2& p, const std::array<V2, 3>& q) {  // q counter-cl
   return orient2(q[0], q[1], p) > 0 && orient2(q[1], q[2], p) > 0 && orient2(q[2], q[0], p) > 0;
 }
 
-/// Does segment ab meet the open triangle q (counter-clockwise)? a + s (b - a)
-/// clipped against the three open half-planes; a touch at a corner or along
-/// a side is no meeting.
-bool meets_interior(const V2& a, const V2& b, const std::array<V2, 3>& q) {
+/// Does segment ab meet the open triangle q (counter-clockwise) other than
+/// within `near` of one of its corners? a + s (b - a) clipped against the
+/// three open half-planes; a touch at a corner or along a side is no
+/// meeting. (A side through a corner of q meets it or not by rounding; a
+/// part of q that is left uncovered within `near` of a corner is within
+/// 2 near of a covered point, which the caller adds to its bound.)
+bool meets_interior(const V2& a, const V2& b, const std::array<V2, 3>& q, double near) {
   double s0 = 0, s1 = 1;
   for (int i = 0; i < 3; ++i) {
     const double fa = orient2(q[i], q[(i + 1) % 3], a), fb = orient2(q[i], q[(i + 1) % 3], b);
@@ -583,14 +652,19 @@ bool meets_interior(const V2& a, const V2& b, const std::array<V2, 3>& q) {
     if (fa <= 0) s0 = std::max(s0, s);  // enters here
     else s1 = std::min(s1, s);          // leaves here
   }
-  return s0 < s1;
+  if (!(s0 < s1)) return false;
+  const V2 in{a.x + s0 * (b.x - a.x), a.y + s0 * (b.y - a.y)}, out{a.x + s1 * (b.x - a.x), a.y + s1 * (b.y - a.y)};
+  auto within = [&](const V2& x, const V2& c) { return std::hypot(x.x - c.x, x.y - c.y) <= near; };
+  for (const V2& c : q)
+    if (within(in, c) && within(out, c)) return false;
+  return true;
 }
 
 }  // namespace
 
-double SurfaceDistance::planar_bound(const Corners& piece, std::size_t t, double max_offset, double limit) const {
+double SurfaceDistance::cover_bound(const Corners& piece, std::size_t t, double limit) const {
   constexpr double kNone = std::numeric_limits<double>::infinity();
-  if (impl_->degenerate[t]) return kNone;
+  if (impl_->degenerate[t] || !(limit < kNone)) return kNone;
   const K::Triangle_3& base = impl_->triangles[t];
   Frame f;
   f.o = v3(base[0]);
@@ -600,17 +674,31 @@ double SurfaceDistance::planar_bound(const Corners& piece, std::size_t t, double
   f.n = {n.x / ln, n.y / ln, n.z / ln};
   f.e1 = {u.x / lu, u.y / lu, u.z / lu};
   f.e2 = cross(f.n, f.e1);
-  double height = 0;
-  for (const Point3d& c : piece) height = std::max(height, std::abs(f.height({c[0], c[1], c[2]})));
-  if (height + max_offset > limit) return kNone;
   std::array<V2, 3> q;
-  for (int k = 0; k < 3; ++k) q[k] = f.at({piece[k][0], piece[k][1], piece[k][2]});
+  std::array<double, 3> hq;
+  for (int k = 0; k < 3; ++k) {
+    const V3 c{piece[k][0], piece[k][1], piece[k][2]};
+    q[k] = f.at(c);
+    hq[k] = f.height(c);
+  }
   const double area = orient2(q[0], q[1], q[2]);
   if (area == 0) return kNone;
-  if (area < 0) std::swap(q[1], q[2]);
-  // Every surface triangle that covers a point of the projection, or has an
-  // edge through it, lies within height + max_offset of the piece (along
-  // the normal): it meets the piece's box grown by that much.
+  if (area < 0) {
+    std::swap(q[1], q[2]);
+    std::swap(hq[1], hq[2]);
+  }
+  // How near a corner of the projection a boundary side may cross it
+  // (rounding): far below any tolerance or error bound.
+  const double near = 1e-9 * std::max({std::hypot(q[1].x - q[0].x, q[1].y - q[0].y),
+                                       std::hypot(q[2].x - q[1].x, q[2].y - q[1].y),
+                                       std::hypot(q[0].x - q[2].x, q[0].y - q[2].y)});
+  // The piece's height over P at a point of its projection (affine).
+  const double area_q = std::abs(area);
+  auto piece_height = [&](const V2& x) {
+    return (orient2(q[1], q[2], x) * hq[0] + orient2(q[2], q[0], x) * hq[1] + orient2(q[0], q[1], x) * hq[2]) / area_q;
+  };
+  // A surface triangle within `limit` of a point of the piece along P's
+  // normal meets the piece's box grown by `limit`.
   Point3d lo = piece[0], hi = piece[0];
   for (const Point3d& c : piece)
     for (int d = 0; d < 3; ++d) {
@@ -618,33 +706,62 @@ double SurfaceDistance::planar_bound(const Corners& piece, std::size_t t, double
       hi[d] = std::max(hi[d], c[d]);
     }
   for (int d = 0; d < 3; ++d) {
-    lo[d] -= height + max_offset;
-    hi[d] += height + max_offset;
+    lo[d] -= limit;
+    hi[d] += limit;
   }
-  struct Side {  // a side of a flat triangle: its ends (sorted), where its third corner lies
+  struct Side {  // a side of an accepted triangle: its ends (sorted), where its third corner lies
     Point3d a, b;
     V2 a2, b2;
     double third;
   };
+  struct Clip {  // a point of the projection and the height gap there (triangle minus piece)
+    V2 x;
+    double gap;
+  };
   std::vector<Side> sides;
-  double offset = 0;
+  std::vector<Clip> poly, next;
+  double bound = 0;
   bool covered = false;
   const V2 centroid{(q[0].x + q[1].x + q[2].x) / 3, (q[0].y + q[1].y + q[2].y) / 3};
   for (std::size_t s : triangles_near(lo, hi)) {
+    if (impl_->degenerate[s]) continue;
     const K::Triangle_3& tri = impl_->triangles[s];
     std::array<Point3d, 3> p;
     std::array<V2, 3> p2;
-    double off = 0;
+    poly.clear();
     for (int k = 0; k < 3; ++k) {
       p[k] = {tri[k].x(), tri[k].y(), tri[k].z()};
       const V3 v = v3(tri[k]);
-      off = std::max(off, std::abs(f.height(v)));
       p2[k] = f.at(v);
+      poly.push_back({p2[k], f.height(v) - piece_height(p2[k])});
     }
-    if (off > max_offset) continue;
     const double a2 = orient2(p2[0], p2[1], p2[2]);
     if (a2 == 0) continue;  // covers nothing
-    offset = std::max(offset, off);
+    // The gap is affine over the triangle's projection: over its part
+    // inside the piece's projection (Sutherland-Hodgman against the
+    // piece's three sides) its largest size is at a corner of that part.
+    for (int e = 0; e < 3 && !poly.empty(); ++e) {
+      const V2 &qa = q[e], &qb = q[(e + 1) % 3];
+      next.clear();
+      for (std::size_t i = 0; i < poly.size(); ++i) {
+        const Clip &c = poly[i], &d = poly[(i + 1) % poly.size()];
+        const double fc = orient2(qa, qb, c.x), fd = orient2(qa, qb, d.x);
+        if (fc >= 0) next.push_back(c);
+        if ((fc > 0 && fd < 0) || (fc < 0 && fd > 0)) {
+          const double w = fc / (fc - fd);
+          next.push_back({{c.x.x + w * (d.x.x - c.x.x), c.x.y + w * (d.x.y - c.x.y)}, c.gap + w * (d.gap - c.gap)});
+        }
+      }
+      poly.swap(next);
+    }
+    // Does not meet the piece's projection (a part along its rim only
+    // counts: the gap there is a true one, and leaving out a triangle that
+    // does meet the open projection would only fail the cover test).
+    if (poly.size() < 3) continue;
+    double gap = 0;
+    for (const Clip& c : poly) gap = std::max(gap, std::abs(c.gap));
+    if (gap > limit) continue;  // too far to help
+    bound = std::max(bound, gap);
     if (!covered) {
       std::array<V2, 3> ccw = p2;
       if (a2 < 0) std::swap(ccw[1], ccw[2]);
@@ -656,8 +773,8 @@ double SurfaceDistance::planar_bound(const Corners& piece, std::size_t t, double
       sides.push_back({p[i], p[j], p2[i], p2[j], orient2(p2[i], p2[j], p2[3 - i - j])});
     }
   }
-  if (!covered || height + offset > limit) return kNone;
-  // The boundary of U: sides with flat triangles on one side of them only.
+  if (!covered) return kNone;
+  // The boundary of U: sides with accepted triangles on one side of them only.
   std::sort(sides.begin(), sides.end(),
             [](const Side& x, const Side& y) { return std::tie(x.a, x.b) < std::tie(y.a, y.b); });
   for (std::size_t i = 0; i < sides.size();) {
@@ -667,10 +784,10 @@ double SurfaceDistance::planar_bound(const Corners& piece, std::size_t t, double
       left |= sides[j].third > 0;
       right |= sides[j].third < 0;
     }
-    if (!(left && right) && meets_interior(sides[i].a2, sides[i].b2, q)) return kNone;
+    if (!(left && right) && meets_interior(sides[i].a2, sides[i].b2, q, near)) return kNone;
     i = j;
   }
-  return height + offset;
+  return bound + 2 * near;
 }
 
 std::pair<double, std::size_t> SurfaceDistance::nearest(const Point3d& p) const {

@@ -53,20 +53,21 @@ class SurfaceDistance {
   bool empty() const;
 
   /// An upper bound on the distance to the surface over the whole triangle
-  /// `piece`, from the plane P of surface triangle `t`; +infinity where it
-  /// cannot be shown. Let U be the union of the surface triangles that meet
-  /// the piece's neighbourhood and lie within `max_offset` of P, projected
-  /// onto P. When the projection of the piece lies in U, every point x of
-  /// the piece is within |h(x)| + offset of the surface (h: height over P;
-  /// offset: the largest of those triangles' corners), a convex function,
-  /// so the bound is its largest value at a corner. The projection lies in
-  /// U when no boundary edge of U (an edge with those triangles on one side
-  /// only) meets its open interior and its centroid lies inside a triangle
-  /// of U. This bounds a piece of a planar region tessellated by long thin
-  /// triangles (CAD fans), where no single triangle is near all its corners.
-  /// Gives up (+infinity) as soon as the bound is seen to exceed `limit`.
-  double planar_bound(const std::array<Point3d, 3>& piece, std::size_t t, double max_offset,
-                      double limit = std::numeric_limits<double>::infinity()) const;
+  /// `piece`, seen along the normal of the plane P of surface triangle `t`;
+  /// +infinity where it cannot be shown to be at most `limit`. Let U be the
+  /// surface triangles whose projections onto P meet the piece's open
+  /// projection, and over that part stay within `limit` of the piece along
+  /// the normal. When the piece's projection lies in U's, every point x of
+  /// the piece is within the height gap g(x) = h_T(x) - h_piece(x) of some
+  /// triangle T of U above or below it; g is affine on each T's part, so
+  /// its largest size is at a corner of the part (clipped in the plane).
+  /// The projection lies in U's when no boundary edge of U (an edge with
+  /// triangles of U on one side only) meets its open interior and its
+  /// centroid lies inside a triangle of U. This bounds a piece over a
+  /// region tessellated by long thin triangles (CAD fans, or a curved
+  /// surface tessellated anew), where no single triangle is near all its
+  /// corners.
+  double cover_bound(const std::array<Point3d, 3>& piece, std::size_t t, double limit) const;
 
  private:
   struct Impl;
