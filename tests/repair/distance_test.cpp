@@ -214,6 +214,44 @@ TEST_CASE("distance: Hausdorff between fan and coarse tessellations of a plate s
   CHECK(filled[1] <= 0.5 + 1e-12);
 }
 
+TEST_CASE("distance: Hausdorff of a removed interior finds its deepest point", "[repair][distance]") {
+  // A sphere of radius 1 with a second one of radius 0.5 inside it, against
+  // the outer sphere alone: what a union leaves out, 0.5 deep. One vertex
+  // of the inner sphere is pulled in to radius 0.15 and its ring to 0.2: a
+  // pit whose bottom is the deepest point (from inside, the distance to the
+  // outer surface is largest nearest the centre). Most inner triangles
+  // finish on the first pass over one corner per grid cell; the pit's
+  // bottom stands in its cell behind a ring vertex (lexicographically
+  // first: the pit points along -x), 0.05 shallower, so only the Lipschitz
+  // terms of that pass keep its triangles.
+  const Soup outer = test::icosphere(1.0, 3);
+  Soup inner = test::icosphere(0.5, 3);
+  const Point3d towards{-1 / std::sqrt(1.25), 0.3 / std::sqrt(1.25), 0.4 / std::sqrt(1.25)};
+  Index pit = 0;
+  auto along = [&](const Point3d& p) { return p[0] * towards[0] + p[1] * towards[1] + p[2] * towards[2]; };
+  for (Index v = 0; v < inner.points.size(); ++v)
+    if (along(inner.points[v]) > along(inner.points[pit])) pit = v;
+  std::vector<char> ring(inner.points.size(), 0);
+  for (std::size_t f = 0; f < inner.face_count(); ++f) {
+    const FaceView face = inner.face(f);
+    if (std::find(face.begin(), face.end(), pit) != face.end())
+      for (Index v : face) ring[v] = 1;
+  }
+  for (Index v = 0; v < inner.points.size(); ++v)
+    if (ring[v]) {
+      const double k = v == pit ? 0.3 : 0.4;
+      inner.points[v] = {k * inner.points[v][0], k * inner.points[v][1], k * inner.points[v][2]};
+    }
+  const double error = 1e-3;
+  const std::array<double, 2> d = detail::one_sided_distances(test::concat(outer, inner), outer, error);
+  const double deepest = std::sqrt(detail::SurfaceDistance(outer).squared_distance(inner.points[pit]));
+  INFO("got " << d[0] << ", the pit's bottom lies " << deepest << " deep");
+  CHECK(deepest > 0.83);
+  CHECK(d[0] >= deepest - 1e-12);
+  CHECK(d[0] <= deepest + error);
+  CHECK(d[1] <= 1e-12);  // the outer sphere is in both
+}
+
 TEST_CASE("distance: nearest-triangle and box queries agree with a search of every triangle", "[repair][distance]") {
   // The index splits long triangles into pieces (the needle fans of the
   // plate, up to 4 long beside 0.02-wide ones) and prunes by box distance;

@@ -1,8 +1,10 @@
 #include "support/builders.h"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 namespace polyheal::test {
 
@@ -21,6 +23,46 @@ Soup tetrahedron(double dx, double dy, double dz) {
 Soup concat(const Soup& a, const Soup& b) {
   Soup s = a;
   s.append(b);
+  return s;
+}
+
+/// A sphere of radius r: an icosahedron subdivided `levels` times, its
+/// vertices pushed onto the sphere.
+Soup icosphere(double r, int levels) {
+  const double t = (1 + std::sqrt(5.0)) / 2;
+  Soup s = soup({{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                       {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}},
+                      {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                       {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
+                       {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}});
+  auto push = [&](Point3d p) {
+    const double l = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    return Point3d{r * p[0] / l, r * p[1] / l, r * p[2] / l};
+  };
+  for (Point3d& p : s.points) p = push(p);
+  for (int level = 0; level < levels; ++level) {
+    Soup next;
+    next.points = s.points;
+    std::map<std::pair<Index, Index>, Index> mid;
+    auto middle = [&](Index a, Index b) {
+      const auto key = std::minmax(a, b);
+      const auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      const Point3d& p = s.points[a];
+      const Point3d& q = s.points[b];
+      next.points.push_back(push({(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2}));
+      return mid[key] = Index(next.points.size() - 1);
+    };
+    for (std::size_t f = 0; f < s.face_count(); ++f) {
+      const Index a = s.face(f)[0], b = s.face(f)[1], c = s.face(f)[2];
+      const Index ab = middle(a, b), bc = middle(b, c), ca = middle(c, a);
+      next.add_triangle(a, ab, ca);
+      next.add_triangle(ab, b, bc);
+      next.add_triangle(ca, bc, c);
+      next.add_triangle(ab, bc, ca);
+    }
+    s = std::move(next);
+  }
   return s;
 }
 

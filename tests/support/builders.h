@@ -16,6 +16,9 @@ Soup soup(std::initializer_list<Point3d> points, std::initializer_list<std::arra
 Soup tetrahedron(double dx = 0, double dy = 0, double dz = 0);
 /// Concatenates soups (indices shifted; points not shared).
 Soup concat(const Soup& a, const Soup& b);
+/// A sphere of radius r about the origin: an icosahedron subdivided
+/// `levels` times, its vertices pushed onto the sphere (20 * 4^levels faces).
+Soup icosphere(double r, int levels);
 
 std::string fixture(const std::string& name);   // path under fixtures/
 std::string scratch(const std::string& name);   // a fresh path in the build tree
