@@ -7,6 +7,7 @@
 #include <CGAL/AABB_triangle_primitive.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <array>
@@ -104,7 +105,7 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
   std::vector<Point3d> corners;
   corners.reserve(3 * from.size());
   for (const Corners& t : from) corners.insert(corners.end(), t.begin(), t.end());
-  std::sort(corners.begin(), corners.end());
+  tbb::parallel_sort(corners.begin(), corners.end());
   corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
   auto index_of = [&](const Point3d& c) {
     return static_cast<std::size_t>(std::lower_bound(corners.begin(), corners.end(), c) - corners.begin());
@@ -137,7 +138,7 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
       std::vector<std::pair<Point3d, std::size_t>> keyed(corners.size());
       for (std::size_t i = 0; i < corners.size(); ++i)
         keyed[i] = {{std::floor(corners[i][0] / cell), std::floor(corners[i][1] / cell), std::floor(corners[i][2] / cell)}, i};
-      std::sort(keyed.begin(), keyed.end());
+      tbb::parallel_sort(keyed.begin(), keyed.end());
       for (std::size_t i = 0; i < keyed.size(); ++i) {
         if (i == 0 || keyed[i].first != keyed[i - 1].first) reps.push_back(keyed[i].second);
         stand_in[keyed[i].second] = reps.back();
@@ -815,8 +816,8 @@ std::array<double, 2> one_sided_distances(const Soup& a, const Soup& b, double e
   // that changed little is measured in time proportional to what it changed.
   std::vector<Corners> ta = triangles_of(a), tb = triangles_of(b);
   std::vector<Corners> sa = ta, sb = tb;
-  std::sort(sa.begin(), sa.end());
-  std::sort(sb.begin(), sb.end());
+  tbb::parallel_sort(sa.begin(), sa.end());
+  tbb::parallel_sort(sb.begin(), sb.end());
   std::vector<Corners> only_a, only_b;
   std::set_difference(sa.begin(), sa.end(), sb.begin(), sb.end(), std::back_inserter(only_a));
   std::set_difference(sb.begin(), sb.end(), sa.begin(), sa.end(), std::back_inserter(only_b));
@@ -833,8 +834,8 @@ double one_sided_distance_skipping(const Soup& a, const Soup& b, double error_bo
                                    const std::function<bool(const Point3d&)>& skip) {
   std::vector<Corners> ta = triangles_of(a), tb = triangles_of(b);
   std::vector<Corners> sa = ta, sb = tb;
-  std::sort(sa.begin(), sa.end());
-  std::sort(sb.begin(), sb.end());
+  tbb::parallel_sort(sa.begin(), sa.end());
+  tbb::parallel_sort(sb.begin(), sb.end());
   std::vector<Corners> only_a;
   std::set_difference(sa.begin(), sa.end(), sb.begin(), sb.end(), std::back_inserter(only_a));
   if (tb.empty() && !only_a.empty()) return -1.0;
