@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 
 #include "polyheal/inspect/report.h"
 #include "polyheal/io/read.h"

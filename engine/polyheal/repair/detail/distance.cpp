@@ -18,6 +18,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <numeric>
 #include <cstdint>
 #include <vector>
 
@@ -107,16 +108,20 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
   for (const Corners& t : from) corners.insert(corners.end(), t.begin(), t.end());
   tbb::parallel_sort(corners.begin(), corners.end());
   corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
-  auto index_of = [&](const Point3d& c) {
-    return static_cast<std::size_t>(std::lower_bound(corners.begin(), corners.end(), c) - corners.begin());
-  };
+  // Each triangle's corners as indices into `corners`, looked up once.
+  std::vector<std::array<std::size_t, 3>> at(from.size());
+  tbb::parallel_for(std::size_t(0), from.size(), [&](std::size_t t) {
+    for (int k = 0; k < 3; ++k)
+      at[t][k] = static_cast<std::size_t>(std::lower_bound(corners.begin(), corners.end(), from[t][k]) - corners.begin());
+  });
   std::vector<std::pair<double, std::size_t>> nearest(corners.size());
   std::vector<char> known(corners.size(), 0);
   auto query = [&](const std::vector<std::size_t>& which) {
     tbb::parallel_for(std::size_t(0), which.size(), [&](std::size_t i) { nearest[which[i]] = to.nearest(corners[which[i]]); });
-    for (std::size_t i : which) known[i] = 1;
   };
-  std::vector<const Corners*> todo;
+  std::vector<std::size_t> every(corners.size());
+  std::iota(every.begin(), every.end(), std::size_t(0));
+  std::vector<std::size_t> todo;  // the triangles the bisection below starts from
   todo.reserve(from.size());
   if (!skip && !corners.empty()) {
     // A first pass over one corner per cell of a grid (cells of four median
@@ -132,8 +137,7 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
     std::vector<double> sorted = longest;
     std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
     const double cell = 4 * sorted[sorted.size() / 2];
-    std::vector<std::size_t> stand_in(corners.size());
-    std::vector<std::size_t> reps;
+    std::vector<std::size_t> stand_in = every, reps;
     if (cell > 0) {
       std::vector<std::pair<Point3d, std::size_t>> keyed(corners.size());
       for (std::size_t i = 0; i < corners.size(); ++i)
@@ -144,35 +148,33 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
         stand_in[keyed[i].second] = reps.back();
       }
     } else {
-      for (std::size_t i = 0; i < corners.size(); ++i) stand_in[i] = i;
-      reps.resize(corners.size());
-      for (std::size_t i = 0; i < corners.size(); ++i) reps[i] = i;
+      reps = every;
     }
     query(reps);
-    for (std::size_t r : reps) lower = std::max(lower, std::sqrt(nearest[r].first));
+    for (std::size_t r : reps) {
+      known[r] = 1;
+      lower = std::max(lower, std::sqrt(nearest[r].first));
+    }
     std::vector<std::size_t> needed;
     for (std::size_t t = 0; t < from.size(); ++t) {
       double bound = std::numeric_limits<double>::infinity();
-      for (const Point3d& c : from[t]) {
-        const std::size_t r = stand_in[index_of(c)];
-        bound = std::min(bound, std::sqrt(nearest[r].first) + norm(c, corners[r]));
+      for (int k = 0; k < 3; ++k) {
+        const std::size_t r = stand_in[at[t][k]];
+        bound = std::min(bound, std::sqrt(nearest[r].first) + norm(from[t][k], corners[r]));
       }
       if (bound + longest[t] <= lower + error_bound) continue;
-      todo.push_back(&from[t]);
-      for (const Point3d& c : from[t]) {
-        const std::size_t i = index_of(c);
+      todo.push_back(t);
+      for (std::size_t i : at[t])
         if (!known[i]) {
-          known[i] = 2;  // listed
+          known[i] = 1;
           needed.push_back(i);
         }
-      }
     }
     query(needed);
   } else {
-    for (const Corners& t : from) todo.push_back(&t);
-    std::vector<std::size_t> all(corners.size());
-    for (std::size_t i = 0; i < corners.size(); ++i) all[i] = i;
-    query(all);
+    todo.resize(from.size());
+    std::iota(todo.begin(), todo.end(), std::size_t(0));
+    query(every);
   }
   constexpr std::size_t kSkippedSplitBudget = 50000;
   std::size_t skipped_splits = 0;
@@ -180,16 +182,16 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
   if (skip)
     tbb::parallel_for(std::size_t(0), corners.size(), [&](std::size_t i) { skipped[i] = (*skip)(corners[i]); });
   std::vector<Piece> stack;
-  for (const Corners* t : todo) {
+  for (std::size_t t : todo) {
     Piece piece;
-    piece.p = *t;
+    piece.p = from[t];
     for (int k = 0; k < 3; ++k) {
-      const std::size_t at = index_of((*t)[k]);
-      const auto [d2, near] = nearest[at];
+      const std::size_t i = at[t][k];
+      const auto [d2, near] = nearest[i];
       piece.d[k] = std::sqrt(d2);
       piece.near[k] = near;
-      piece.skipped[k] = skipped[at];
-      if (!skipped[at]) lower = std::max(lower, piece.d[k]);
+      piece.skipped[k] = skipped[i];
+      if (!skipped[i]) lower = std::max(lower, piece.d[k]);
     }
     piece.best = piece.near[0];
     stack.push_back(piece);
