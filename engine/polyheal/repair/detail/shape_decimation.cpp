@@ -395,7 +395,11 @@ struct ShapeDecimator::Impl {
     // A triangle off the input surface (one across a crease, or across a
     // curved part's facets) is forbidden and the triangulation chosen again,
     // up to four times: the best shape is often the one across.
-    std::vector<std::array<std::size_t, 3>> forbidden;
+    // Per triangle (i, k, j) of the ring: its quality, computed on first
+    // use (the attempts share it), and whether it is forbidden.
+    auto at = [n](std::size_t i, std::size_t k, std::size_t j) { return (i * n + k) * n + j; };
+    std::vector<double> shape(n * n * n, -1.0);
+    std::vector<char> forbidden(n * n * n, 0);
     std::vector<double> best(n * n);
     std::vector<int> cut(n * n);
     std::vector<std::array<std::size_t, 3>> tris;
@@ -411,9 +415,10 @@ struct ShapeDecimator::Impl {
           if (!(i == 0 && j == n - 1) && !allowed[i * n + j]) continue;
           for (std::size_t k = i + 1; k < j; ++k) {
             const double left = k > i + 1 ? best[i * n + k] : 180.0, right = j > k + 1 ? best[k * n + j] : 180.0;
-            if (std::find(forbidden.begin(), forbidden.end(), std::array<std::size_t, 3>{i, k, j}) != forbidden.end())
-              continue;
-            const double q = std::min({left, right, quality(approx(ring[i]), approx(ring[k]), approx(ring[j]))});
+            if (forbidden[at(i, k, j)]) continue;
+            double& own = shape[at(i, k, j)];
+            if (own < 0) own = quality(approx(ring[i]), approx(ring[k]), approx(ring[j]));
+            const double q = std::min({left, right, own});
             if (q > best[i * n + j]) {
               best[i * n + j] = q;
               cut[i * n + j] = static_cast<int>(k);
@@ -431,10 +436,13 @@ struct ShapeDecimator::Impl {
         if (k > i + 1) todo.emplace_back(i, k);
         if (j > k + 1) todo.emplace_back(k, j);
       }
-      const std::size_t before = forbidden.size();
+      bool more = false;
       for (const auto& t : tris)
-        if (!near_input({ring[t[0]], ring[t[1]], ring[t[2]]}, last)) forbidden.push_back(t);
-      if (forbidden.size() == before) break;
+        if (!near_input({ring[t[0]], ring[t[1]], ring[t[2]]}, last)) {
+          forbidden[at(t[0], t[1], t[2])] = 1;
+          more = true;
+        }
+      if (!more) break;
     }
     plan = Plan{};
     plan.removal = true;
