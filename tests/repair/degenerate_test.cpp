@@ -213,13 +213,31 @@ TEST_CASE("degenerate: CAD tessellations from the corpus, certified on the file 
     repair_fixture_as_written(name);
 }
 
+// A knife's blade: a prism over a triangle with a 3-degree tip, 1 thick. The
+// top and bottom faces are each one needle whose short edge (0.52 across)
+// is 50 times the tolerance: no collapse of it stays within the tolerance,
+// the tip's corner lies between creases (nothing may move it), and halving
+// cuts leave a band whose triangle has the tip's angle again. A series of
+// cuts across it at distances from the tip falling geometrically removes it.
+TEST_CASE("degenerate: a sharp corner between creases goes by a series of cuts (a blade)", "[repair][degenerate]") {
+  const double half = 10 * std::tan(1.5 * M_PI / 180);  // 3 degrees at the tip
+  const Soup input = test::soup({{0, 0, 0}, {10, half, 0}, {10, -half, 0}, {0, 0, -1}, {10, half, -1}, {10, -half, -1}},
+                                {{0, 2, 1}, {3, 4, 5},                // top (up), bottom (down)
+                                 {0, 1, 4}, {0, 4, 3},                // side through the tip and B
+                                 {0, 3, 5}, {0, 5, 2},                // side through the tip and C
+                                 {1, 2, 5}, {1, 5, 4}});              // the blunt end
+  const DegenerateResult r = run(input);
+  CHECK(r.report.before.needles >= 2);
+  WARN("blade: " << input.face_count() << " faces -> " << r.soup.face_count() << " (" << r.report.wedge_cuts
+                 << " cuts across " << r.report.wedge_tips << " wedge tips)");
+  CHECK(r.report.wedge_tips >= 1);
+}
+
 // trimesh's fixed_top (a CAD export, dense needle fans) has a flat face with
-// a corner of about 4 degrees between creases, whose tip's short edge is 3-4
-// times the tolerance: no collapse of it stays within the tolerance, and
-// halving cuts leave a band whose triangle has the tip's angle again. It
-// ended with that one needle before cut_wedge().
-TEST_CASE("degenerate: a CAD face's sharp corner goes by a series of cuts (fixed_top)", "[repair][corpus]") {
-  CHECK(repair_fixture_as_written("corpus/trimesh__fixed_top.ply").report.wedge_tips >= 1);
+// a corner of about 4 degrees between creases; it ended with that one needle
+// before cut_wedge() (since stagger_strips() its path no longer reaches it).
+TEST_CASE("degenerate: a CAD export with dense needle fans and a sharp corner (fixed_top)", "[repair][corpus]") {
+  repair_fixture_as_written("corpus/trimesh__fixed_top.ply");
 }
 // ADIS16480 (7.4k faces, 3640 needles in dense CAD fans) ended with one such
 // wedge tip too; since the decimator's choices no longer depend on which

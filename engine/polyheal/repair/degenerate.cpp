@@ -22,6 +22,16 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// Vector arithmetic on double points, for measurements and choices.
+Point3d operator-(const Point3d& a, const Point3d& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+Point3d operator+(const Point3d& a, const Point3d& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
+Point3d operator*(const Point3d& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
+double dot(const Point3d& a, const Point3d& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+double squared_length(const Point3d& a) { return dot(a, a); }
+Point3d cross(const Point3d& a, const Point3d& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+
 ShapeCounts shape_counts(const Report& r) { return {r.degenerate_faces.size(), r.caps.size(), r.needles.size()}; }
 
 InspectOptions inspect_options(const DegenerateOptions& o) {
@@ -426,9 +436,16 @@ class Pipeline {
         const face_descriptor f = mesh_.face(g);
         if (f == Mesh::null_face()) continue;
         const vertex_descriptor x = mesh_.source(g), y = mesh_.target(mesh_.next(g));
+        // q on side a-end: its split points were rounded to doubles right
+        // after their cut (settle()), an ulp off the side's line, so on
+        // doubles, to a relative 1e-9 (exact collinearity lost the tip
+        // after one cut: a 3-degree blade kept its needle).
         auto on_side = [&](vertex_descriptor q, vertex_descriptor end) {
-          return q == end || (CGAL::collinear(mesh_.point(a), mesh_.point(q), mesh_.point(end)) &&
-                              CGAL::collinear_are_ordered_along_line(mesh_.point(a), mesh_.point(q), mesh_.point(end)));
+          if (q == end) return true;
+          const Point3d pa = approx_point3d(mesh_.point(a)), u = approx_point3d(mesh_.point(q)) - pa,
+                        w = approx_point3d(mesh_.point(end)) - pa;
+          const double uu = squared_length(u), ww = squared_length(w);
+          return uu > 0 && uu <= ww && dot(u, w) > 0 && squared_length(cross(u, w)) <= 1e-18 * uu * ww;
         };
         if ((on_side(x, b) && on_side(y, c)) || (on_side(x, c) && on_side(y, b))) {
           tip = f;
