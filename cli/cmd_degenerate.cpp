@@ -61,6 +61,8 @@ nlohmann::json to_json(const DegenerateArgs& a, const DegenerateReport& r, doubl
         {"needle_slices_refused", r.needle_slices_refused},
         {"wedge_tips", r.wedge_tips},
         {"wedge_cuts", r.wedge_cuts},
+        {"strips_staggered", r.strips_staggered},
+        {"strip_points", r.strip_points},
         {"collapses", r.collapses},
         {"flips", r.flips},
         {"removals", r.removals},
@@ -95,10 +97,12 @@ void print_text(const DegenerateArgs& a, const DegenerateReport& r) {
               r.faces_in, r.repeated_index_faces, r.faces_after_zero_area, r.faces_after_slicing, r.peak_faces,
               r.faces_out);
   std::printf("  slices: %zu grid (%zu refused), %zu cap (%zu refused, %s%s), %zu needle (%zu refused), "
-              "%zu across %zu wedge tips; %zu collapses, %zu flips, %zu removals; %zu split points rounded early\n",
+              "%zu across %zu wedge tips, %zu points staggered on %zu strips; %zu collapses, %zu flips, %zu removals; "
+              "%zu split points rounded early\n",
               r.grid_slices, r.grid_slices_refused, r.cap_slices, r.cap_slices_refused,
               r.global_slices ? "global" : "local", r.interleave ? ", interleaved" : "", r.needle_slices,
-              r.needle_slices_refused, r.wedge_cuts, r.wedge_tips, r.collapses, r.flips, r.removals,
+              r.needle_slices_refused, r.wedge_cuts, r.wedge_tips, r.strip_points, r.strips_staggered, r.collapses,
+              r.flips, r.removals,
               r.split_points_rounded);
   std::printf("  after:  %s\n", counts(r.after).c_str());
   std::printf("  topology: euler %ld -> %ld, components %zu -> %zu, boundary loops %zu -> %zu%s\n", r.topology_in.euler,

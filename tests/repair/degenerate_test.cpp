@@ -478,23 +478,58 @@ Soup cad_prism(int n, double radius, double length) {
   return s;
 }
 
-}  // namespace
-
-TEST_CASE("degenerate: a CAD cylinder's strips are cut into as few pieces as clear the needle angle",
-          "[repair][degenerate]") {
-  // 40 strips 29 times longer than wide: halves (atan(2/29) = 3.9 deg) are
-  // still needles, thirds (5.9 deg) are not. Halving twice makes 4 pieces
-  // per strip, 8 faces (less what collapses take within the tolerance:
-  // 300 faces out); thirds make 6, and removing split points whose hole
-  // needs a new triangulation across the strips beside them (no collapse's
-  // fan gives it) leaves fewer (316 faces out without such removals). At
-  // most 5 faces per strip, the end fans kept.
-  const int n = 40;
+/// The prism of n strips 29 times longer than wide (halves of a strip,
+/// atan(2/29) = 3.9 deg, are still needles; thirds, 5.9 deg, are not),
+/// repaired and checked; each strip's two faces are needles before.
+DegenerateResult strips_29_to_1(int n) {
   const double width = 2 * std::sin(M_PI / n);
   const Soup input = cad_prism(n, 1.0, 29 * width);
-  const DegenerateResult r = run(input);
-  CHECK(r.report.before.needles == 2 * n);
-  WARN("CAD prism: " << input.face_count() << " faces -> " << r.soup.face_count() << " ("
-                     << r.report.needle_slices << " needle cuts, " << r.report.collapses << " collapses)");
-  CHECK(r.soup.face_count() <= 2 * n + 5 * n);
+  DegenerateResult r = run(input);
+  CHECK(r.report.before.needles == std::size_t(2 * n));
+  WARN(n << " strips: " << input.face_count() << " faces -> " << r.soup.face_count() << " ("
+         << r.report.strip_points << " points on " << r.report.strips_staggered << " strips, "
+         << r.report.needle_slices << " needle cuts, " << r.report.collapses << " collapses)");
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("degenerate: a CAD cylinder's strips get staggered points on their sides, 4 triangles each",
+          "[repair][degenerate]") {
+  // Cuts across the strips put points on both sides at the same places, 6
+  // triangles per strip (300 faces out after what the decimation removes);
+  // one point per side, at 1/3 on one and 2/3 on the next, makes a zigzag of
+  // 4 triangles of about 5.9 degrees — the side's point serves the strips on
+  // both sides of it. The strips are too far apart in angle (9 degrees) to
+  // be merged within the tolerance.
+  const int n = 40;
+  const DegenerateResult r = strips_29_to_1(n);
+  CHECK(r.report.strips_staggered == std::size_t(n));
+  CHECK(r.soup.face_count() <= 2 * n + 4 * n);
+}
+
+TEST_CASE("degenerate: in a ring of an odd number of strips the last one is aligned, and repaired too",
+          "[repair][degenerate]") {
+  // Staggering alternates around the ring; with 41 strips the last strip's
+  // two sides have their points at the same place (thirds: halves of 29:1
+  // strips are needles), which the needle rounds repair.
+  const int n = 41;
+  const DegenerateResult r = strips_29_to_1(n);
+  CHECK(r.soup.face_count() <= 2 * n + 4 * n + 8);
+}
+
+TEST_CASE("degenerate: a finely faceted cylinder is coarsened, not staggered", "[repair][degenerate]") {
+  // 60 strips of 20:1, 6 degrees apart: with a tolerance a fifth of their
+  // width a strip's neighbour lies within it of the strip's plane (the
+  // side's sagitta is 0.26 of it), and decimation merges neighbouring
+  // strips, halving their aspect; staggered points would add faces instead.
+  const int n = 60;
+  const double width = 2 * std::sin(M_PI / n);
+  const Soup input = cad_prism(n, 1.0, 20 * width);
+  DegenerateOptions o;
+  o.tolerance = 0.2 * width;
+  const DegenerateResult r = run(input, o);
+  CHECK(r.report.strips_staggered == 0);
+  WARN("fine CAD prism: " << input.face_count() << " faces -> " << r.soup.face_count());
+  CHECK(r.soup.face_count() < input.face_count());
 }

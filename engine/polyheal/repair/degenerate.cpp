@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <deque>
+#include <set>
 #include <map>
 #include <cmath>
 
@@ -30,6 +32,20 @@ double dot(const Point3d& a, const Point3d& b) { return a[0] * b[0] + a[1] * b[1
 double squared_length(const Point3d& a) { return dot(a, a); }
 Point3d cross(const Point3d& a, const Point3d& b) {
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+
+/// Whether triangle abc's angles lie within [needle, cap] degrees, on
+/// doubles (for choices, not a predicate).
+bool angles_within(const Point3d& a, const Point3d& b, const Point3d& c, double needle, double cap) {
+  const std::array<Point3d, 3> p{a, b, c};
+  for (int k = 0; k < 3; ++k) {
+    const Point3d u = p[(k + 1) % 3] - p[k], v = p[(k + 2) % 3] - p[k];
+    const double uu = squared_length(u), vv = squared_length(v);
+    if (!(uu > 0 && vv > 0)) return false;
+    const double angle = std::acos(std::clamp(dot(u, v) / std::sqrt(uu * vv), -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
+    if (angle < needle || angle > cap) return false;
+  }
+  return true;
 }
 
 ShapeCounts shape_counts(const Report& r) { return {r.degenerate_faces.size(), r.caps.size(), r.needles.size()}; }
@@ -288,6 +304,106 @@ class Pipeline {
       tidy(all);
     }
     return made;
+  }
+
+  /// §5 supersampling where a CAD surface needs it most: a cylinder's or
+  /// cone's facet, a thin quad split by its diagonal into two needles (the
+  /// paper's Fig. 1). Cuts across such a strip put points on both long
+  /// sides at the same places (and on the diagonal), and a strip of aspect
+  /// A then needs ceil(A tan(needle angle)) pieces, each two triangles. Here
+  /// the sides get staggered points instead: with q pieces of the side
+  /// (q odd), one side gets the points at odd j/q, the other those at even
+  /// j/q, and the zigzag between them has q + 1 triangles whose smallest
+  /// angles are about atan(q / A) — q = 3 where cuts needed 3 pieces and
+  /// 6 triangles (cgal__joint's 30:1 strips: 4 triangles each). Neighbouring
+  /// strips share a side, so its points serve both: strips are visited
+  /// across their shared sides, and a strip whose one side has points gets
+  /// the mirrored positions on the other (in a ring of an odd number of
+  /// strips the last one is left with aligned points, and the needle rounds
+  /// after it). The split points lie on the sides exactly and the faces
+  /// beside them are fanned (detail::split_edges: nothing moves); the
+  /// decimation after it (tidy()) flips each strip into its zigzag, with
+  /// every check of an operation. Returns the points made.
+  std::size_t stagger_strips() {
+    refresh_frozen();
+    const std::vector<Strip> strips = find_strips();
+    if (strips.empty()) return 0;
+    std::map<EdgeKey, std::vector<std::size_t>> by_side;
+    std::set<face_descriptor> in_strip;
+    for (std::size_t i = 0; i < strips.size(); ++i) {
+      const Strip& s = strips[i];
+      by_side[edge_key(s.a, s.c)].push_back(i);
+      by_side[edge_key(s.d, s.b)].push_back(i);
+      for (halfedge_descriptor h : {CGAL::halfedge(s.a, s.b, mesh_).first, CGAL::halfedge(s.b, s.a, mesh_).first})
+        in_strip.insert(mesh_.face(h));
+    }
+    std::map<EdgeKey, Grid> at;  // measured from the side's smaller vertex index
+    std::set<face_descriptor> fanned;  // faces beside a side with a grid (one such side each)
+    auto get = [&](vertex_descriptor from, vertex_descriptor to) -> std::optional<Grid> {
+      const auto it = at.find(edge_key(from, to));
+      if (it == at.end()) return std::nullopt;
+      return it->second.from(from == edge_key(from, to).first);
+    };
+    // Grid g (measured from `from`) for the side, unless a face beside it
+    // has another side with a grid, is frozen, or (no strip's) would be
+    // fanned into a needle or cap. A grid without points (q = 2, parity 0)
+    // takes the same test — refused beside a needle that is no strip's, the
+    // side is left to the strip across it: fewer faces so (ADIS16480 5688
+    // faces; 5830 when such sides were given their empty grid anyway).
+    auto put = [&](vertex_descriptor from, vertex_descriptor to, Grid g) {
+      const halfedge_descriptor h = CGAL::halfedge(from, to, mesh_).first;
+      std::vector<face_descriptor> beside;
+      for (halfedge_descriptor x : {h, mesh_.opposite(h)})
+        if (!mesh_.is_border(x)) beside.push_back(mesh_.face(x));
+      const std::vector<double> points = g.fractions();
+      for (face_descriptor f : beside)
+        if (fanned.count(f) || is_frozen(f) || (!in_strip.count(f) && !fans_well(f, from, to, points))) return;
+      fanned.insert(beside.begin(), beside.end());
+      at[edge_key(from, to)] = g.from(from == edge_key(from, to).first);
+    };
+    std::vector<char> visited(strips.size(), 0);
+    std::size_t staggered = 0;
+    for (std::size_t first = 0; first < strips.size(); ++first) {
+      if (visited[first]) continue;
+      visited[first] = 1;
+      std::deque<std::size_t> queue{first};
+      while (!queue.empty()) {
+        const Strip& s = strips[queue.front()];
+        queue.pop_front();
+        const std::optional<Grid> top = get(s.a, s.c), bottom = get(s.d, s.b);
+        if (!top && !bottom) {
+          put(s.a, s.c, Grid{s.pieces, 1});
+          put(s.d, s.b, Grid{s.pieces, 0});
+        } else if (top && !bottom) {
+          put(s.d, s.b, Grid{top->pieces, 1 - top->parity});
+        } else if (!top && bottom) {
+          put(s.a, s.c, Grid{bottom->pieces, 1 - bottom->parity});
+        }
+        staggered += get(s.a, s.c) && get(s.d, s.b);
+        for (const EdgeKey& side : {edge_key(s.a, s.c), edge_key(s.d, s.b)})
+          for (std::size_t t : by_side[side])
+            if (!visited[t]) {
+              visited[t] = 1;
+              queue.push_back(t);
+            }
+      }
+    }
+    std::vector<detail::EdgeSplit> splits;
+    std::size_t points = 0;
+    for (const auto& [side, grid] : at) {
+      const auto [u, w] = side;
+      detail::EdgeSplit split{CGAL::halfedge(u, w, mesh_).first, {}};
+      for (double f : grid.fractions())  // exactly on the side
+        split.points.push_back(mesh_.point(u) + (mesh_.point(w) - mesh_.point(u)) * Kernel::FT(f));
+      points += split.points.size();
+      if (!split.points.empty()) splits.push_back(std::move(split));
+    }
+    const detail::SliceResult s = detail::split_edges(mesh_, splits);
+    r_.strips_staggered += staggered;
+    r_.strip_points += points;
+    after_slice(s);
+    tidy(s);
+    return points;
   }
 
   /// Whether the needle is the side of a thin strip: its apex (the corner
@@ -592,6 +708,117 @@ class Pipeline {
     decimator_.simplify(s.vertices);
   }
 
+  /// A thin quad split by its diagonal ab into two needles: sides a -> c
+  /// and d -> b run from the same end; the sides get `pieces` pieces.
+  struct Strip {
+    vertex_descriptor a, b, c, d;
+    int pieces;
+  };
+  using EdgeKey = std::pair<vertex_descriptor, vertex_descriptor>;  // smaller index first
+  static EdgeKey edge_key(vertex_descriptor u, vertex_descriptor w) { return u < w ? EdgeKey{u, w} : EdgeKey{w, u}; }
+  /// The points of a side: j/q for 0 < j < q with j's parity. A strip's two
+  /// sides share q and take opposite parities, measured from its a/d end.
+  struct Grid {
+    int pieces, parity;
+    std::vector<double> fractions() const {
+      std::vector<double> out;
+      for (int j = 1; j < pieces; ++j)
+        if (j % 2 == parity) out.push_back(double(j) / pieces);
+      return out;
+    }
+    /// The same points measured from the side's other end unless
+    /// `same_end`: j/q is (q - j)/q there, of the other parity when q is odd.
+    Grid from(bool same_end) const { return same_end ? *this : Grid{pieces, (parity + pieces) % 2}; }
+  };
+
+  bool is_frozen(face_descriptor f) const {
+    const std::optional<FaceOriginMap> origin = face_origin_map(mesh_);
+    if (!origin) return false;
+    const std::int64_t i = (*origin)[f];
+    return i >= 0 && static_cast<std::size_t>(i) < frozen_.size() && frozen_[static_cast<std::size_t>(i)];
+  }
+
+  Point3d at(vertex_descriptor v) const { return approx_point3d(mesh_.point(v)); }
+
+  /// The strips among the needles that decimation cannot serve better, with
+  /// the pieces their sides need: the fewest q >= 2 whose zigzag's angles,
+  /// about atan(q w / |side|), clear 1.1 needle angles, at most 15.
+  std::vector<Strip> find_strips() const {
+    const double tan_needle = std::tan(1.1 * o_.needle_angle * 3.14159265358979323846 / 180.0);
+    std::vector<Strip> strips;
+    for (auto e : mesh_.edges()) {
+      if (mesh_.is_border(e)) continue;
+      halfedge_descriptor h = mesh_.halfedge(e);
+      const face_descriptor n = mesh_.face(h), m = mesh_.face(mesh_.opposite(h));
+      if (is_frozen(n) || is_frozen(m) || classify_face(mesh_, n, cos_cap_, cos_needle_) != Shape::needle ||
+          classify_face(mesh_, m, cos_cap_, cos_needle_) != Shape::needle)
+        continue;
+      const double tn = apex_along(h), tm = apex_along(mesh_.opposite(h));
+      if (tn < 0.1 && tm < 0.1) h = mesh_.opposite(h);  // the apexes over the other ends
+      else if (!(tn > 0.9 && tm > 0.9)) continue;
+      Strip s{mesh_.source(h), mesh_.target(h), mesh_.target(mesh_.next(h)),
+              mesh_.target(mesh_.next(mesh_.opposite(h))), 0};
+      const Point3d pa = at(s.a);
+      const double side2 = squared_length(at(s.c) - pa);
+      const double width2 = squared_length(cross(at(s.c) - pa, at(s.b) - pa)) / side2;  // b's height over ac
+      // A strip no wider than the tolerance is collapsed, and one whose
+      // neighbour across a side is nearly in its plane is merged with it
+      // (the circle of a finely faceted cylinder coarsened): decimation
+      // serves those better (trimesh__round: 1030 faces; 2064 staggered).
+      if (!(width2 > r_.tolerance * r_.tolerance) || mergeable(s.a, s.c, s.b) || mergeable(s.b, s.d, s.a)) continue;
+      const double q = std::ceil(std::sqrt(side2 / width2) * tan_needle);
+      if (!(q <= 15)) continue;
+      s.pieces = std::max(2, static_cast<int>(q));
+      strips.push_back(s);
+    }
+    return strips;
+  }
+
+  /// Where the apex of h's face stands over h (0: over its source, 1: over
+  /// its target); 0.5 unless h is the face's longest edge.
+  double apex_along(halfedge_descriptor h) const {
+    const Point3d a = at(mesh_.source(h)), b = at(mesh_.target(h)), c = at(mesh_.target(mesh_.next(h)));
+    const double ab = squared_length(b - a);
+    if (!(ab > 0) || squared_length(c - b) > ab || squared_length(a - c) > ab) return 0.5;
+    return dot(c - a, b - a) / ab;
+  }
+
+  /// Whether side uw could go, the faces on its two sides (this one's corner
+  /// off it: `apex`) made one, within 70% of the tolerance (where the
+  /// decimation decides): the side's distance from the chord between the
+  /// two corners off it, in the cross-section perpendicular to the side.
+  bool mergeable(vertex_descriptor u, vertex_descriptor w, vertex_descriptor apex) const {
+    const auto [h, found] = CGAL::halfedge(u, w, mesh_);  // in the face across
+    if (!found || mesh_.is_border(h)) return false;
+    const Point3d pu = at(u), t = at(w) - pu;
+    const double t2 = squared_length(t);
+    if (!(t2 > 0)) return false;
+    auto across_side = [&](vertex_descriptor x) {  // x - u without its part along the side
+      const Point3d d = at(x) - pu;
+      return d - t * (dot(d, t) / t2);
+    };
+    const Point3d p = across_side(apex), q = across_side(mesh_.target(mesh_.next(h)));
+    const double chord2 = squared_length(q - p);
+    return chord2 > 0 && squared_length(cross(p, q)) <= 0.49 * r_.tolerance * r_.tolerance * chord2;
+  }
+
+  /// Whether face f (beside side (from, to), no strip's), fanned from its
+  /// corner off the side to the points at `fractions` of it (from `from`),
+  /// has no needle or cap piece — on doubles: this only chooses where to cut.
+  bool fans_well(face_descriptor f, vertex_descriptor from, vertex_descriptor to,
+                 const std::vector<double>& fractions) const {
+    vertex_descriptor apex = from;
+    for (vertex_descriptor v : CGAL::vertices_around_face(mesh_.halfedge(f), mesh_))
+      if (v != from && v != to) apex = v;
+    const Point3d p = at(from), d = at(to) - p, c = at(apex);
+    std::vector<double> ts{0.0};
+    ts.insert(ts.end(), fractions.begin(), fractions.end());
+    ts.push_back(1.0);
+    for (std::size_t i = 0; i + 1 < ts.size(); ++i)
+      if (!angles_within(p + d * ts[i], p + d * ts[i + 1], c, o_.needle_angle, o_.cap_angle)) return false;
+    return true;
+  }
+
   Mesh& mesh_;
   const DegenerateOptions& o_;
   DegenerateReport& r_;
@@ -664,6 +891,7 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   // neighbourhood changed, so alternate while slicing makes progress
   t0 = std::chrono::steady_clock::now();
   if (o.observer) o.observer->stage("decimating needles");
+  pipeline.stagger_strips();
   pipeline.decimate(pipeline.bad_faces());
   // What decimation could not remove: caps whose slice was refused may be
   // sliceable now that their neighbourhood changed; stuck needles get local

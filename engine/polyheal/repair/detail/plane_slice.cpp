@@ -320,6 +320,54 @@ SliceResult slice_by_plane(Mesh& mesh, const Kernel::Plane_3& plane, const Slice
   return Slicer(mesh, plane, options).run();
 }
 
+SliceResult split_edges(Mesh& mesh, const std::vector<EdgeSplit>& splits) {
+  SliceResult result;
+  const std::optional<FaceOriginMap> origin = face_origin_map(mesh);
+  FaceFlagMap on_input = face_on_input_map(mesh);
+  for (const EdgeSplit& split : splits) {
+    if (split.points.empty()) continue;
+    // the faces beside the edge, each with its corner opposite it
+    std::vector<std::pair<face_descriptor, vertex_descriptor>> beside;
+    for (halfedge_descriptor h : {split.edge, mesh.opposite(split.edge)})
+      if (!mesh.is_border(h)) beside.emplace_back(mesh.face(h), mesh.target(mesh.next(h)));
+    halfedge_descriptor rest = split.edge;  // from the last split point on to the edge's target
+    std::vector<vertex_descriptor> points;
+    for (const Point& x : split.points) {
+      const halfedge_descriptor hn = CGAL::Euler::split_edge(rest, mesh);  // next(hn) == rest
+      const vertex_descriptor vx = mesh.target(hn);
+      mesh.point(vx) = x;
+      points.push_back(vx);
+      result.vertices.push_back(vx);
+      ++result.edges_split;
+    }
+    for (const auto& [f, apex] : beside) {
+      ++result.faces_cut;
+      std::vector<face_descriptor> pieces{f};
+      for (vertex_descriptor vx : points)
+        for (face_descriptor g : pieces) {  // the piece that still has vx beside its edge
+          halfedge_descriptor to_apex, to_point;
+          std::size_t corners = 0;
+          for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh.halfedge(g), mesh)) {
+            ++corners;
+            if (mesh.target(h) == apex) to_apex = h;
+            if (mesh.target(h) == vx) to_point = h;
+          }
+          if (corners == 3 || to_apex == halfedge_descriptor() || to_point == halfedge_descriptor()) continue;
+          const face_descriptor piece = mesh.face(mesh.opposite(CGAL::Euler::split_face(to_apex, to_point, mesh)));
+          if (origin) (*origin)[piece] = (*origin)[f];
+          on_input[piece] = on_input[f];
+          pieces.push_back(piece);
+          break;
+        }
+      for (face_descriptor g : pieces) {
+        result.faces.push_back(g);
+        result.parents.push_back(f);
+      }
+    }
+  }
+  return result;
+}
+
 Kernel::Plane_3 cap_plane(const Mesh& mesh, face_descriptor cap, SliceOptions& options) {
   std::vector<vertex_descriptor> v;
   std::vector<Point> p;

@@ -75,6 +75,22 @@ struct SliceResult {
 
 SliceResult slice_by_plane(Mesh& mesh, const Kernel::Plane_3& plane, const SliceOptions& options);
 
+/// An edge (as a halfedge) and exact points strictly inside it, ordered
+/// from its source.
+struct EdgeSplit {
+  halfedge_descriptor edge;
+  std::vector<Point> points;
+};
+
+/// §5 supersampling at chosen points instead of along a plane: each edge is
+/// split at its points and each face beside it is fanned from its opposite
+/// corner. Nothing moves (the surface point set is the same), so no
+/// self-intersection is created. Precondition: no face has two of the
+/// edges, and the points lie on their edges. The fan pieces may be caps
+/// (the split point of a needle's long side, seen from the far end of its
+/// diagonal): the caller's decimation flips them away.
+SliceResult split_edges(Mesh& mesh, const std::vector<EdgeSplit>& splits);
+
 /// §3: the plane that eliminates cap `cap` — through its obtuse vertex A,
 /// perpendicular to its longest edge BC — with B and C added to
 /// `options.protected_vertices` so that the slice really splits BC:
