@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "polyheal/mesh/vec3.h"
 #include "polyheal/mesh/weld.h"
 
 namespace polyheal {
@@ -32,11 +33,6 @@ class Rng {
   std::mt19937_64 g_;
 };
 
-Point3d sub(const Point3d& a, const Point3d& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Point3d cross(const Point3d& a, const Point3d& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double norm(const Point3d& a) { return std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
 Point3d along(const Point3d& p, const Point3d& dir, double t) {
   return {p[0] + t * dir[0], p[1] + t * dir[1], p[2] + t * dir[2]};
 }

@@ -12,6 +12,7 @@
 #include "polyheal/inspect/local_index.h"
 #include "polyheal/mesh/convert.h"
 #include "polyheal/mesh/errors.h"
+#include "polyheal/mesh/vec3.h"
 #include "polyheal/mesh/weld.h"
 #include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/detail/plane_slice.h"
@@ -24,23 +25,13 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Vector arithmetic on double points, for measurements and choices.
-Point3d operator-(const Point3d& a, const Point3d& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Point3d operator+(const Point3d& a, const Point3d& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-Point3d operator*(const Point3d& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double dot(const Point3d& a, const Point3d& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double squared_length(const Point3d& a) { return dot(a, a); }
-Point3d cross(const Point3d& a, const Point3d& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-
 /// Whether triangle abc's angles lie within [needle, cap] degrees, on
 /// doubles (for choices, not a predicate).
 bool angles_within(const Point3d& a, const Point3d& b, const Point3d& c, double needle, double cap) {
   const std::array<Point3d, 3> p{a, b, c};
   for (int k = 0; k < 3; ++k) {
-    const Point3d u = p[(k + 1) % 3] - p[k], v = p[(k + 2) % 3] - p[k];
-    const double uu = squared_length(u), vv = squared_length(v);
+    const Point3d u = sub(p[(k + 1) % 3], p[k]), v = sub(p[(k + 2) % 3], p[k]);
+    const double uu = squared_norm(u), vv = squared_norm(v);
     if (!(uu > 0 && vv > 0)) return false;
     const double angle = std::acos(std::clamp(dot(u, v) / std::sqrt(uu * vv), -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
     if (angle < needle || angle > cap) return false;
@@ -414,13 +405,9 @@ class Pipeline {
   bool on_strip(halfedge_descriptor e) const {
     const Point3d a = approx_point3d(mesh_.point(mesh_.source(e))), b = approx_point3d(mesh_.point(mesh_.target(e)));
     const Point3d c = approx_point3d(mesh_.point(mesh_.target(mesh_.next(e))));
-    double along = 0, length2 = 0;
-    for (int k = 0; k < 3; ++k) {
-      along += (c[k] - a[k]) * (b[k] - a[k]);
-      length2 += (b[k] - a[k]) * (b[k] - a[k]);
-    }
+    const double length2 = squared_norm(sub(b, a));
     if (!(length2 > 0)) return false;
-    const double t = along / length2;
+    const double t = dot(sub(c, a), sub(b, a)) / length2;
     return std::min(t, 1 - t) < 0.1;
   }
 
@@ -436,10 +423,7 @@ class Pipeline {
     std::array<Point3d, 3> c;
     halfedge_descriptor h = mesh_.halfedge(needle);
     for (int k = 0; k < 3; ++k, h = mesh_.next(h)) c[k] = approx_point3d(mesh_.point(mesh_.target(h)));
-    const Point3d u{c[1][0] - c[0][0], c[1][1] - c[0][1], c[1][2] - c[0][2]};
-    const Point3d v{c[2][0] - c[0][0], c[2][1] - c[0][1], c[2][2] - c[0][2]};
-    const double twice_area = std::sqrt(std::pow(u[1] * v[2] - u[2] * v[1], 2) + std::pow(u[2] * v[0] - u[0] * v[2], 2) +
-                                        std::pow(u[0] * v[1] - u[1] * v[0], 2));
+    const double twice_area = norm(cross(sub(c[1], c[0]), sub(c[2], c[0])));
     const double length = std::sqrt(CGAL::to_double(CGAL::squared_distance(p, q)));
     if (!(twice_area > 0) || !(length > 0)) return 2;
     const double k = std::ceil(length * length * std::tan(1.1 * o_.needle_angle * 3.14159265358979323846 / 180.0) /
@@ -486,9 +470,7 @@ class Pipeline {
         p[k] = approx_point3d(mesh_.point(v[k]));
       }
     }
-    auto length = [](const Point3d& x, const Point3d& y) {
-      return std::sqrt((x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2]));
-    };
+    auto length = [](const Point3d& x, const Point3d& y) { return norm(sub(x, y)); };
     // the apex: the corner opposite the shortest edge
     int k = 0;
     for (int j = 1; j < 3; ++j)
@@ -558,10 +540,10 @@ class Pipeline {
         // after one cut: a 3-degree blade kept its needle).
         auto on_side = [&](vertex_descriptor q, vertex_descriptor end) {
           if (q == end) return true;
-          const Point3d pa = approx_point3d(mesh_.point(a)), u = approx_point3d(mesh_.point(q)) - pa,
-                        w = approx_point3d(mesh_.point(end)) - pa;
-          const double uu = squared_length(u), ww = squared_length(w);
-          return uu > 0 && uu <= ww && dot(u, w) > 0 && squared_length(cross(u, w)) <= 1e-18 * uu * ww;
+          const Point3d pa = approx_point3d(mesh_.point(a)), u = sub(approx_point3d(mesh_.point(q)), pa),
+                        w = sub(approx_point3d(mesh_.point(end)), pa);
+          const double uu = squared_norm(u), ww = squared_norm(w);
+          return uu > 0 && uu <= ww && dot(u, w) > 0 && squared_norm(cross(u, w)) <= 1e-18 * uu * ww;
         };
         if ((on_side(x, b) && on_side(y, c)) || (on_side(x, c) && on_side(y, b))) {
           tip = f;
@@ -749,18 +731,19 @@ class Pipeline {
     for (auto e : mesh_.edges()) {
       if (mesh_.is_border(e)) continue;
       halfedge_descriptor h = mesh_.halfedge(e);
+      // the shape on doubles first (cheap, and rarely met), then exactly
+      const double tn = apex_along(h), tm = apex_along(mesh_.opposite(h));
+      if (tn < 0.1 && tm < 0.1) h = mesh_.opposite(h);  // the apexes over the other ends
+      else if (!(tn > 0.9 && tm > 0.9)) continue;
       const face_descriptor n = mesh_.face(h), m = mesh_.face(mesh_.opposite(h));
       if (is_frozen(n) || is_frozen(m) || classify_face(mesh_, n, cos_cap_, cos_needle_) != Shape::needle ||
           classify_face(mesh_, m, cos_cap_, cos_needle_) != Shape::needle)
         continue;
-      const double tn = apex_along(h), tm = apex_along(mesh_.opposite(h));
-      if (tn < 0.1 && tm < 0.1) h = mesh_.opposite(h);  // the apexes over the other ends
-      else if (!(tn > 0.9 && tm > 0.9)) continue;
       Strip s{mesh_.source(h), mesh_.target(h), mesh_.target(mesh_.next(h)),
               mesh_.target(mesh_.next(mesh_.opposite(h))), 0};
       const Point3d pa = at(s.a);
-      const double side2 = squared_length(at(s.c) - pa);
-      const double width2 = squared_length(cross(at(s.c) - pa, at(s.b) - pa)) / side2;  // b's height over ac
+      const double side2 = squared_norm(sub(at(s.c), pa));
+      const double width2 = squared_norm(cross(sub(at(s.c), pa), sub(at(s.b), pa))) / side2;  // b's height over ac
       // A strip no wider than the tolerance is collapsed, and one whose
       // neighbour across a side is nearly in its plane is merged with it
       // (the circle of a finely faceted cylinder coarsened): decimation
@@ -778,9 +761,9 @@ class Pipeline {
   /// its target); 0.5 unless h is the face's longest edge.
   double apex_along(halfedge_descriptor h) const {
     const Point3d a = at(mesh_.source(h)), b = at(mesh_.target(h)), c = at(mesh_.target(mesh_.next(h)));
-    const double ab = squared_length(b - a);
-    if (!(ab > 0) || squared_length(c - b) > ab || squared_length(a - c) > ab) return 0.5;
-    return dot(c - a, b - a) / ab;
+    const double ab = squared_norm(sub(b, a));
+    if (!(ab > 0) || squared_norm(sub(c, b)) > ab || squared_norm(sub(a, c)) > ab) return 0.5;
+    return dot(sub(c, a), sub(b, a)) / ab;
   }
 
   /// Whether side uw could go, the faces on its two sides (this one's corner
@@ -790,16 +773,16 @@ class Pipeline {
   bool mergeable(vertex_descriptor u, vertex_descriptor w, vertex_descriptor apex) const {
     const auto [h, found] = CGAL::halfedge(u, w, mesh_);  // in the face across
     if (!found || mesh_.is_border(h)) return false;
-    const Point3d pu = at(u), t = at(w) - pu;
-    const double t2 = squared_length(t);
+    const Point3d pu = at(u), t = sub(at(w), pu);
+    const double t2 = squared_norm(t);
     if (!(t2 > 0)) return false;
     auto across_side = [&](vertex_descriptor x) {  // x - u without its part along the side
-      const Point3d d = at(x) - pu;
-      return d - t * (dot(d, t) / t2);
+      const Point3d d = sub(at(x), pu);
+      return sub(d, mul(t, dot(d, t) / t2));
     };
     const Point3d p = across_side(apex), q = across_side(mesh_.target(mesh_.next(h)));
-    const double chord2 = squared_length(q - p);
-    return chord2 > 0 && squared_length(cross(p, q)) <= 0.49 * r_.tolerance * r_.tolerance * chord2;
+    const double chord2 = squared_norm(sub(q, p));
+    return chord2 > 0 && squared_norm(cross(p, q)) <= 0.49 * r_.tolerance * r_.tolerance * chord2;
   }
 
   /// Whether face f (beside side (from, to), no strip's), fanned from its
@@ -810,12 +793,12 @@ class Pipeline {
     vertex_descriptor apex = from;
     for (vertex_descriptor v : CGAL::vertices_around_face(mesh_.halfedge(f), mesh_))
       if (v != from && v != to) apex = v;
-    const Point3d p = at(from), d = at(to) - p, c = at(apex);
+    const Point3d p = at(from), d = sub(at(to), p), c = at(apex);
     std::vector<double> ts{0.0};
     ts.insert(ts.end(), fractions.begin(), fractions.end());
     ts.push_back(1.0);
     for (std::size_t i = 0; i + 1 < ts.size(); ++i)
-      if (!angles_within(p + d * ts[i], p + d * ts[i + 1], c, o_.needle_angle, o_.cap_angle)) return false;
+      if (!angles_within(add(p, mul(d, ts[i])), add(p, mul(d, ts[i + 1])), c, o_.needle_angle, o_.cap_angle)) return false;
     return true;
   }
 

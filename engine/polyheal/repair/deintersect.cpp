@@ -18,6 +18,7 @@
 #include "polyheal/mesh/convert.h"
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/mesh.h"
+#include "polyheal/mesh/vec3.h"
 #include "polyheal/repair/detail/distance.h"
 
 namespace polyheal {
@@ -31,12 +32,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-Point3d sub(const Point3d& a, const Point3d& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot(const Point3d& a, const Point3d& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Point3d cross(const Point3d& a, const Point3d& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double length(const Point3d& a) { return std::sqrt(dot(a, a)); }
 /// |volume| of tetrahedron abcd (a cost, not a predicate).
 double tet_volume(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& d) {
   return std::abs(dot(sub(b, a), cross(sub(c, a), sub(d, a)))) / 6.0;
@@ -442,14 +437,14 @@ class Deintersector {
       const Point& stop = xs.size() == 1 ? mesh_.point(b) : xs[1];  // the move must not pass it
       paper.push_back(CGAL::midpoint(xs[0], stop));
       const Point3d x = approx_point3d(xs[0]), towards = sub(approx_point3d(stop), x);
-      const double room = length(towards), eps = edge_clearance(length(sub(p3(b), p3(a))));
+      const double room = norm(towards), eps = edge_clearance(norm(sub(p3(b), p3(a))));
       if (room > 0 && eps < 0.5 * room) {
         const double t = eps / room;
         near.push_back(Point(x[0] + t * towards[0], x[1] + t * towards[1], x[2] + t * towards[2]));
       }
       if (xs.size() > 1) {
         const Point3d xl = approx_point3d(xs.back()), to_b = sub(p3(b), xl);
-        const double room2 = length(to_b);
+        const double room2 = norm(to_b);
         if (room2 > 0 && eps < 0.5 * room2) {
           const double t = eps / room2;
           near.push_back(Point(xl[0] + t * to_b[0], xl[1] + t * to_b[1], xl[2] + t * to_b[2]));
@@ -518,7 +513,7 @@ class Deintersector {
   double clearance(face_descriptor f, const Point3d& n) const {
     const auto c = corners(f);
     double longest = 0;
-    for (int k = 0; k < 3; ++k) longest = std::max(longest, length(sub(p3(c[k]), p3(c[(k + 1) % 3]))));
+    for (int k = 0; k < 3; ++k) longest = std::max(longest, norm(sub(p3(c[k]), p3(c[(k + 1) % 3]))));
     switch (o_.clearance_mode) {
       case ClearanceMode::absolute: return o_.clearance;
       case ClearanceMode::tet_aspect: return longest / o_.clearance;
@@ -544,7 +539,7 @@ class Deintersector {
   double shortest_edge(vertex_descriptor v) const {
     double shortest = std::numeric_limits<double>::infinity();
     for (vertex_descriptor b : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_))
-      shortest = std::min(shortest, length(sub(p3(b), p3(v))));
+      shortest = std::min(shortest, norm(sub(p3(b), p3(v))));
     return shortest;
   }
 
@@ -568,7 +563,7 @@ class Deintersector {
   /// predicate); false for a face too small to have one.
   bool unit_normal(face_descriptor f, Point3d& n) const {
     n = approx_point3d(CGAL::ORIGIN + normal(f));
-    const double len = length(n);
+    const double len = norm(n);
     if (!(len > 0)) return false;
     for (double& x : n) x /= len;
     return true;
@@ -694,8 +689,8 @@ class Deintersector {
     double best_shift = 0;
     for (const Point& p : to) {
       const Point q = nearest_double_point(p);
-      const double shift = length(sub(approx_point3d(q), p3(v)));
-      if (length(sub(approx_point3d(q), original_[v])) > r_.max_displacement_allowed || q == mesh_.point(v)) continue;
+      const double shift = norm(sub(approx_point3d(q), p3(v)));
+      if (norm(sub(approx_point3d(q), original_[v])) > r_.max_displacement_allowed || q == mesh_.point(v)) continue;
       if (!best || shift < best_shift) best = q, best_shift = shift;
     }
     return best;
@@ -723,7 +718,7 @@ class Deintersector {
         todo.pop_back();
         const Point& to = through.at(std::size_t(v));
         op.moves.push_back({v, to});
-        op.shift = std::max(op.shift, length(sub(approx_point3d(to), p3(v))));
+        op.shift = std::max(op.shift, norm(sub(approx_point3d(to), p3(v))));
         for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_))
           if (through.count(std::size_t(w)) && done.insert(std::size_t(w)).second) todo.push_back(w);
       }
@@ -828,8 +823,8 @@ class Deintersector {
       bool within = true;
       for (const auto& [v, p] : op.moves) {
         const Point3d to = approx_point3d(p);
-        op.shift = std::max(op.shift, length(sub(to, p3(v))));
-        within = within && length(sub(to, original_[v])) <= r_.max_displacement_allowed && !(pinned_ && (*pinned_)[v]);
+        op.shift = std::max(op.shift, norm(sub(to, p3(v))));
+        within = within && norm(sub(to, original_[v])) <= r_.max_displacement_allowed && !(pinned_ && (*pinned_)[v]);
       }
       if (!within) continue;
       op.cost = move_cost(op);
@@ -896,7 +891,7 @@ DeintersectResult remove_self_intersections(const Soup& input, const Deintersect
   r.intersecting_faces_exact = repair.intersecting_faces();
   for (vertex_descriptor v : mesh.vertices()) {
     const Point3d p = approx_point3d(mesh.point(v));
-    const double d = length(sub(p, original[v]));
+    const double d = norm(sub(p, original[v]));
     if (d == 0) continue;
     ++r.moved_vertices;
     r.max_displacement = std::max(r.max_displacement, d);

@@ -11,6 +11,7 @@
 
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/union_find.h"
+#include "polyheal/mesh/vec3.h"
 #include "polyheal/repair/detail/distance.h"
 
 namespace polyheal {
@@ -18,14 +19,6 @@ namespace {
 
 using Vec = std::array<double, 3>;
 
-Vec sub(const Vec& a, const Vec& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec add(const Vec& a, const Vec& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-Vec mul(const Vec& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double dot(const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec cross(const Vec& a, const Vec& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double norm(const Vec& a) { return std::sqrt(dot(a, a)); }
 Vec unit(const Vec& a) {
   const double l = norm(a);
   return l > 0 ? mul(a, 1.0 / l) : a;

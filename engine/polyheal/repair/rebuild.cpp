@@ -25,6 +25,7 @@
 #include "polyheal/mesh/mesh.h"
 #include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/union_find.h"
+#include "polyheal/mesh/vec3.h"
 #include "polyheal/mesh/weld.h"
 #include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/detail/shape_decimation.h"
@@ -40,8 +41,6 @@ using Tri = std::array<Index, 3>;
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
-
-double dot(const Point3d& a, const Point3d& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 /// Grows g's box to hold p (`first`: the box is p).
 void grow(Region& g, const Point3d& p, bool first) {

@@ -14,6 +14,7 @@
 #include "polyheal/inspect/exact_predicates.h"
 #include "polyheal/inspect/local_index.h"
 #include "polyheal/mesh/convert.h"
+#include "polyheal/mesh/vec3.h"
 #include "polyheal/repair/detail/distance.h"
 
 namespace polyheal::detail {
@@ -23,8 +24,6 @@ constexpr double kPi = 3.14159265358979323846;
 using Triple = std::array<vertex_descriptor, 3>;
 
 
-Point3d operator-(const Point3d& a, const Point3d& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot(const Point3d& a, const Point3d& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 /// Shape quality of a triangle for ordering (not a predicate): its smallest
 /// angle or 180° minus its largest, whichever is smaller, in degrees.
@@ -32,7 +31,7 @@ double quality(const Point3d& a, const Point3d& b, const Point3d& c) {
   const std::array<Point3d, 3> p{a, b, c};
   double lo = 180.0, hi = 0.0;
   for (int k = 0; k < 3; ++k) {
-    const Point3d u = p[(k + 1) % 3] - p[k], v = p[(k + 2) % 3] - p[k];
+    const Point3d u = sub(p[(k + 1) % 3], p[k]), v = sub(p[(k + 2) % 3], p[k]);
     const double n = std::sqrt(dot(u, u) * dot(v, v));
     const double angle = n > 0 ? std::acos(std::clamp(dot(u, v) / n, -1.0, 1.0)) * 180.0 / kPi : 0.0;
     lo = std::min(lo, angle);
@@ -191,7 +190,7 @@ struct ShapeDecimator::Impl {
     // the tolerance is within it everywhere; longer ones are sampled.
     double longest2 = 0;
     for (int k = 0; k < 3; ++k) {
-      const Point3d d = approx(t[k]) - approx(t[(k + 1) % 3]);
+      const Point3d d = sub(approx(t[k]), approx(t[(k + 1) % 3]));
       longest2 = std::max(longest2, dot(d, d));
     }
     if (longest2 <= tol2) return true;
@@ -203,7 +202,7 @@ struct ShapeDecimator::Impl {
       // The corners lie on the input: a sample within the tolerance of one
       // needs no search.
       for (const Point3d& c : corner) {
-        const Point3d d = p - c;
+        const Point3d d = sub(p, c);
         if (dot(d, d) <= tol2) return;
       }
       if (!input.any_within(p, tol2, last)) ok = false;
@@ -473,7 +472,7 @@ struct ShapeDecimator::Impl {
     }
     // edges by length: hs[k] runs from corner k-1 to corner k
     std::array<int, 3> order{0, 1, 2};
-    auto len = [&](int k) { const Point3d d = p[k] - p[(k + 2) % 3]; return dot(d, d); };
+    auto len = [&](int k) { const Point3d d = sub(p[k], p[(k + 2) % 3]); return dot(d, d); };
     std::sort(order.begin(), order.end(), [&](int a, int b) { return len(a) < len(b); });
     std::vector<Plan> candidates;
     Plan plan;
