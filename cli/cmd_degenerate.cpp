@@ -63,6 +63,7 @@ nlohmann::json to_json(const DegenerateArgs& a, const DegenerateReport& r, doubl
         {"wedge_cuts", r.wedge_cuts},
         {"strips_staggered", r.strips_staggered},
         {"strip_points", r.strip_points},
+        {"strip_zigzags", r.strip_zigzags},
         {"collapses", r.collapses},
         {"flips", r.flips},
         {"removals", r.removals},

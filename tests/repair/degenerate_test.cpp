@@ -518,6 +518,20 @@ TEST_CASE("degenerate: in a ring of an odd number of strips the last one is alig
   CHECK(r.soup.face_count() <= 2 * n + 4 * n + 8);
 }
 
+TEST_CASE("degenerate: a long thin cylinder's strips become zigzags of many points", "[repair][degenerate]") {
+  // 24 strips 153 times longer than wide need 15 pieces a side (atan(15/153)
+  // = 5.6 deg): 7 points on each side. From the fans the split leaves, the
+  // decimation's flips stalled (131 needles left); the strips are
+  // retriangulated as the zigzag directly, q + 1 = 16 triangles each.
+  // Before staggering the same prism kept 100 needles.
+  const int n = 24;
+  const Soup input = cad_prism(n, 1.0, 40.0);
+  const DegenerateResult r = run(input);
+  CHECK(r.report.before.needles == std::size_t(2 * n));
+  CHECK(r.report.strip_zigzags == std::size_t(n));
+  CHECK(r.soup.face_count() <= 2 * n + 16 * n);
+}
+
 TEST_CASE("degenerate: a finely faceted cylinder is coarsened, not staggered", "[repair][degenerate]") {
   // 60 strips of 20:1, 6 degrees apart: with a tolerance a fifth of their
   // width a strip's neighbour lies within it of the strip's plane (the

@@ -1,5 +1,7 @@
 #include "polyheal/repair/degenerate.h"
 
+#include <CGAL/boost/graph/Euler_operations.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -21,8 +23,23 @@
 namespace polyheal {
 namespace {
 
+using Triple = std::array<vertex_descriptor, 3>;
+
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// Triangle abc's smallest angle in degrees, on doubles (for choices).
+double smallest_angle(const Point3d& a, const Point3d& b, const Point3d& c) {
+  const std::array<Point3d, 3> p{a, b, c};
+  double lo = 180;
+  for (int k = 0; k < 3; ++k) {
+    const Point3d u = sub(p[(k + 1) % 3], p[k]), v = sub(p[(k + 2) % 3], p[k]);
+    const double uu = squared_norm(u), vv = squared_norm(v);
+    if (!(uu > 0 && vv > 0)) return 0;
+    lo = std::min(lo, std::acos(std::clamp(dot(u, v) / std::sqrt(uu * vv), -1.0, 1.0)) * 180.0 / 3.14159265358979323846);
+  }
+  return lo;
 }
 
 /// Whether triangle abc's angles lie within [needle, cap] degrees, on
@@ -71,6 +88,30 @@ Soup preprocess(const Soup& input, std::size_t& dropped) {
 /// The working mesh, with all machinery of stages 2-4.
 class Pipeline {
  public:
+  /// A thin quad split by its diagonal ab into two needles: sides a -> c
+  /// and d -> b run from the same end; the sides get `pieces` pieces.
+  struct Strip {
+    vertex_descriptor a, b, c, d;
+    int pieces;
+    face_descriptor n, m;  // (a, b, c) and (b, a, d)
+  };
+  using EdgeKey = std::pair<vertex_descriptor, vertex_descriptor>;  // smaller index first
+  static EdgeKey edge_key(vertex_descriptor u, vertex_descriptor w) { return u < w ? EdgeKey{u, w} : EdgeKey{w, u}; }
+  /// The points of a side: j/q for 0 < j < q with j's parity. A strip's two
+  /// sides share q and take opposite parities, measured from its a/d end.
+  struct Grid {
+    int pieces, parity;
+    std::vector<double> fractions() const {
+      std::vector<double> out;
+      for (int j = 1; j < pieces; ++j)
+        if (j % 2 == parity) out.push_back(double(j) / pieces);
+      return out;
+    }
+    /// The same points measured from the side's other end unless
+    /// `same_end`: j/q is (q - j)/q there, of the other parity when q is odd.
+    Grid from(bool same_end) const { return same_end ? *this : Grid{pieces, (parity + pieces) % 2}; }
+  };
+
   Pipeline(Mesh& mesh, const detail::SurfaceDistance& input, const DegenerateOptions& o, DegenerateReport& r)
       : mesh_(mesh), o_(o), r_(r), index_(mesh), decimator_(mesh, index_, input, decimation_options(o, r)) {
     cos_cap_ = cos_degrees(o.cap_angle);
@@ -380,6 +421,7 @@ class Pipeline {
       }
     }
     std::vector<detail::EdgeSplit> splits;
+    std::vector<EdgeKey> split_keys;
     std::size_t points = 0;
     for (const auto& [side, grid] : at) {
       const auto [u, w] = side;
@@ -387,14 +429,160 @@ class Pipeline {
       for (double f : grid.fractions())  // exactly on the side
         split.points.push_back(mesh_.point(u) + (mesh_.point(w) - mesh_.point(u)) * Kernel::FT(f));
       points += split.points.size();
-      if (!split.points.empty()) splits.push_back(std::move(split));
+      if (split.points.empty()) continue;
+      splits.push_back(std::move(split));
+      split_keys.push_back(side);
     }
-    const detail::SliceResult s = detail::split_edges(mesh_, splits);
+    detail::SliceResult s = detail::split_edges(mesh_, splits);
+    // each side's new points, in order from its smaller vertex index
+    std::map<EdgeKey, std::vector<vertex_descriptor>> points_on;
+    for (std::size_t i = 0, k = 0; i < splits.size(); ++i)
+      for (std::size_t j = 0; j < splits[i].points.size(); ++j) points_on[split_keys[i]].push_back(s.vertices[k++]);
+    index_.update(s.faces);
+    std::size_t zigzags = 0;
+    for (const Strip& strip : strips) zigzags += zigzag(strip, points_on, s);
     r_.strips_staggered += staggered;
     r_.strip_points += points;
+    r_.strip_zigzags += zigzags;
     after_slice(s);
     tidy(s);
     return points;
+  }
+
+  /// The strip's faces (the pieces of its two faces after their sides were
+  /// split) replaced by the zigzag between its sides' points: vertices in
+  /// order of their position along the strip, a triangle per point. Made
+  /// only where every new triangle is fine (exactly), the strip is planar
+  /// to a tenth of the tolerance (its corner d within that of plane abc, so
+  /// the zigzag stays that near the input), and no new triangle meets
+  /// another face (the oracle's local query); else the fans stay and the
+  /// decimation's flips take over (which, from fans of many points, can
+  /// stall: a 24-strip cylinder 150 times longer than wide kept 131
+  /// needles). Updates `s` (faces and parents) and the index. Returns
+  /// whether it was made.
+  bool zigzag(const Strip& strip, const std::map<EdgeKey, std::vector<vertex_descriptor>>& points_on,
+              detail::SliceResult& s) {
+    auto chain = [&](vertex_descriptor from, vertex_descriptor to) {
+      std::vector<vertex_descriptor> out{from};
+      const auto it = points_on.find(edge_key(from, to));
+      if (it != points_on.end()) {
+        if (from == edge_key(from, to).first) out.insert(out.end(), it->second.begin(), it->second.end());
+        else out.insert(out.end(), it->second.rbegin(), it->second.rend());
+      }
+      out.push_back(to);
+      return out;
+    };
+    const std::vector<vertex_descriptor> top = chain(strip.a, strip.c), bottom = chain(strip.d, strip.b);
+    // With up to three points the decimation's flips reach the zigzag from
+    // the fans (cgal__joint, a 40-strip 29:1 prism), in the order it treats
+    // the neighbourhood: ADIS16480 came out with 5688 faces so, 5772 with its
+    // one three-point strip zigzagged here, 5818 with its two-point ones too.
+    if (top.size() + bottom.size() <= 7) return false;
+    const Point3d pa = at(strip.a), pb = at(strip.b), pc = at(strip.c), pd = at(strip.d);
+    const Point3d normal = cross(sub(pb, pa), sub(pc, pa));
+    const double n2 = squared_norm(normal), off = dot(normal, sub(pd, pa));
+    if (!(n2 > 0) || off * off > 0.01 * r_.tolerance * r_.tolerance * n2) return false;
+    // the zigzag, by position along each side (top a -> c, bottom d -> b)
+    auto along = [&](vertex_descriptor v, const Point3d& from, const Point3d& to) {
+      return dot(sub(at(v), from), sub(to, from)) / squared_norm(sub(to, from));
+    };
+    std::vector<Triple> proposed;
+    std::vector<char> from_top;
+    for (std::size_t i = 0, j = 0; i + 1 < top.size() || j + 1 < bottom.size();) {
+      // the side whose next point comes first; at a tie (the far end, or
+      // points across from each other) the better-shaped triangle
+      bool advance_top = j + 1 == bottom.size();
+      if (!advance_top && i + 1 < top.size()) {
+        const double t = along(top[i + 1], pa, pc), u = along(bottom[j + 1], pd, pb);
+        advance_top = std::abs(t - u) < 1e-9
+                          ? smallest_angle(at(top[i]), at(bottom[j]), at(top[i + 1])) >
+                                smallest_angle(at(top[i]), at(bottom[j]), at(bottom[j + 1]))
+                          : t < u;
+      }
+      if (advance_top) {
+        proposed.push_back({top[i], bottom[j], top[i + 1]});
+        ++i;
+      } else {
+        proposed.push_back({top[i], bottom[j], bottom[j + 1]});
+        ++j;
+      }
+      from_top.push_back(advance_top);
+    }
+    for (const Triple& t : proposed)
+      if (classify_triangle(mesh_.point(t[0]), mesh_.point(t[1]), mesh_.point(t[2]), cos_cap_, cos_needle_) !=
+          Shape::fine)
+        return false;
+    const face_descriptor n = mesh_.face(CGAL::halfedge(strip.b, strip.c, mesh_).first),
+                          m = mesh_.face(CGAL::halfedge(strip.a, strip.d, mesh_).first);
+    std::vector<face_descriptor> region;
+    for (std::size_t k = 0; k < s.faces.size(); ++k)
+      if (s.parents[k] == strip.n || s.parents[k] == strip.m) region.push_back(s.faces[k]);
+    if (std::find(region.begin(), region.end(), n) == region.end() ||
+        std::find(region.begin(), region.end(), m) == region.end())
+      return false;
+    if (index_.would_intersect(proposed, region)) return false;
+    // the region as one face, then cut along the zigzag's diagonals
+    for (face_descriptor f : region) index_.remove(f);
+    const std::optional<FaceOriginMap> origin = face_origin_map(mesh_);
+    const std::int64_t origin_of = origin ? (*origin)[strip.n] : -1;
+    std::vector<face_descriptor> left(region);
+    for (bool joined = true; joined && left.size() > 1;) {
+      joined = false;
+      for (face_descriptor f : left) {
+        for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_)) {
+          const face_descriptor g = mesh_.face(mesh_.opposite(h));
+          if (g == f || std::find(left.begin(), left.end(), g) == left.end()) continue;
+          CGAL::Euler::join_face(h, mesh_);  // g goes
+          left.erase(std::find(left.begin(), left.end(), g));
+          joined = true;
+          break;
+        }
+        if (joined) break;
+      }
+    }
+    if (left.size() != 1) return false;  // not reached: the region is a disk
+    std::vector<face_descriptor> made;
+    face_descriptor rest = left.front();
+    for (std::size_t k = 0; k + 1 < proposed.size(); ++k) {
+      // the diagonal closing triangle k: from its top corner to its bottom one
+      const vertex_descriptor x = from_top[k] ? proposed[k][2] : proposed[k][0];
+      const vertex_descriptor y = from_top[k] ? proposed[k][1] : proposed[k][2];
+      halfedge_descriptor hx, hy;
+      for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(rest), mesh_)) {
+        if (mesh_.target(h) == x) hx = h;
+        if (mesh_.target(h) == y) hy = h;
+      }
+      const halfedge_descriptor d = CGAL::Euler::split_face(hx, hy, mesh_);
+      const face_descriptor one = mesh_.face(d), other = mesh_.face(mesh_.opposite(d));
+      // the triangle is the piece holding proposed[k]'s third corner
+      const vertex_descriptor third = from_top[k] ? proposed[k][0] : proposed[k][1];
+      bool one_is_triangle = false;
+      for (vertex_descriptor v : CGAL::vertices_around_face(mesh_.halfedge(one), mesh_)) one_is_triangle |= v == third;
+      made.push_back(one_is_triangle ? one : other);
+      rest = one_is_triangle ? other : one;
+    }
+    made.push_back(rest);
+    FaceFlagMap on_input = face_on_input_map(mesh_);
+    for (face_descriptor f : made) {
+      if (origin) (*origin)[f] = origin_of;
+      on_input[f] = 1;  // on the input to a tenth of the tolerance: replaced later, its samples are checked
+    }
+    index_.update(made);
+    // the slice's record: the region's pieces out, the zigzag in
+    std::vector<face_descriptor> faces;
+    std::vector<face_descriptor> parents;
+    for (std::size_t k = 0; k < s.faces.size(); ++k)
+      if (s.parents[k] != strip.n && s.parents[k] != strip.m) {
+        faces.push_back(s.faces[k]);
+        parents.push_back(s.parents[k]);
+      }
+    for (std::size_t k = 0; k < made.size(); ++k) {
+      faces.push_back(made[k]);
+      parents.push_back(from_top[k] ? strip.n : strip.m);
+    }
+    s.faces = std::move(faces);
+    s.parents = std::move(parents);
+    return true;
   }
 
   /// Whether the needle is the side of a thin strip: its apex (the corner
@@ -690,29 +878,6 @@ class Pipeline {
     decimator_.simplify(s.vertices);
   }
 
-  /// A thin quad split by its diagonal ab into two needles: sides a -> c
-  /// and d -> b run from the same end; the sides get `pieces` pieces.
-  struct Strip {
-    vertex_descriptor a, b, c, d;
-    int pieces;
-  };
-  using EdgeKey = std::pair<vertex_descriptor, vertex_descriptor>;  // smaller index first
-  static EdgeKey edge_key(vertex_descriptor u, vertex_descriptor w) { return u < w ? EdgeKey{u, w} : EdgeKey{w, u}; }
-  /// The points of a side: j/q for 0 < j < q with j's parity. A strip's two
-  /// sides share q and take opposite parities, measured from its a/d end.
-  struct Grid {
-    int pieces, parity;
-    std::vector<double> fractions() const {
-      std::vector<double> out;
-      for (int j = 1; j < pieces; ++j)
-        if (j % 2 == parity) out.push_back(double(j) / pieces);
-      return out;
-    }
-    /// The same points measured from the side's other end unless
-    /// `same_end`: j/q is (q - j)/q there, of the other parity when q is odd.
-    Grid from(bool same_end) const { return same_end ? *this : Grid{pieces, (parity + pieces) % 2}; }
-  };
-
   bool is_frozen(face_descriptor f) const {
     const std::optional<FaceOriginMap> origin = face_origin_map(mesh_);
     if (!origin) return false;
@@ -740,7 +905,7 @@ class Pipeline {
           classify_face(mesh_, m, cos_cap_, cos_needle_) != Shape::needle)
         continue;
       Strip s{mesh_.source(h), mesh_.target(h), mesh_.target(mesh_.next(h)),
-              mesh_.target(mesh_.next(mesh_.opposite(h))), 0};
+              mesh_.target(mesh_.next(mesh_.opposite(h))), 0, mesh_.face(h), mesh_.face(mesh_.opposite(h))};
       const Point3d pa = at(s.a);
       const double side2 = squared_norm(sub(at(s.c), pa));
       const double width2 = squared_norm(cross(sub(at(s.c), pa), sub(at(s.b), pa))) / side2;  // b's height over ac
@@ -750,7 +915,7 @@ class Pipeline {
       // serves those better (trimesh__round: 1030 faces; 2064 staggered).
       if (!(width2 > r_.tolerance * r_.tolerance) || mergeable(s.a, s.c, s.b) || mergeable(s.b, s.d, s.a)) continue;
       const double q = std::ceil(std::sqrt(side2 / width2) * tan_needle);
-      if (!(q <= 15)) continue;
+      if (!(q <= 64)) continue;
       s.pieces = std::max(2, static_cast<int>(q));
       strips.push_back(s);
     }

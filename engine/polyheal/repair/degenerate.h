@@ -104,6 +104,7 @@ struct DegenerateReport {
   std::size_t needle_slices = 0, needle_slices_refused = 0;
   std::size_t wedge_tips = 0, wedge_cuts = 0;  // cut_wedge(): tips given a series of cuts, cuts made
   std::size_t strips_staggered = 0, strip_points = 0;  // stagger_strips(): strips given side points, points
+  std::size_t strip_zigzags = 0;  // ... strips retriangulated directly as the zigzag between them
   std::size_t collapses = 0, flips = 0;
   std::size_t removals = 0;  // split points (and, when stuck, any vertex) removed with the hole triangulated anew
   std::size_t split_points_rounded = 0;  // slices' split points given their doubles early (settle)
