@@ -3,7 +3,10 @@
 // (those are exact: inspect/exact_predicates.h).
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <utility>
 
 #include "polyheal/mesh/soup.h"
 
@@ -18,5 +21,20 @@ inline Point3d cross(const Point3d& a, const Point3d& b) {
 }
 inline double squared_norm(const Point3d& a) { return dot(a, a); }
 inline double norm(const Point3d& a) { return std::sqrt(dot(a, a)); }
+
+/// Triangle abc's smallest and largest angles, in degrees (an angle at a
+/// corner with a zero-length side counts as 0).
+inline std::pair<double, double> angle_range(const Point3d& a, const Point3d& b, const Point3d& c) {
+  const std::array<Point3d, 3> p{a, b, c};
+  double lo = 180.0, hi = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const Point3d u = sub(p[(k + 1) % 3], p[k]), v = sub(p[(k + 2) % 3], p[k]);
+    const double n = std::sqrt(dot(u, u) * dot(v, v));
+    const double angle = n > 0 ? std::acos(std::clamp(dot(u, v) / n, -1.0, 1.0)) * 180.0 / 3.14159265358979323846 : 0.0;
+    lo = std::min(lo, angle);
+    hi = std::max(hi, angle);
+  }
+  return {lo, hi};
+}
 
 }  // namespace polyheal

@@ -5,10 +5,10 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
-#include <deque>
-#include <set>
-#include <map>
 #include <cmath>
+#include <deque>
+#include <map>
+#include <set>
 
 #include "polyheal/inspect/exact_predicates.h"
 #include "polyheal/inspect/local_index.h"
@@ -29,31 +29,16 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-/// Triangle abc's smallest angle in degrees, on doubles (for choices).
-double smallest_angle(const Point3d& a, const Point3d& b, const Point3d& c) {
-  const std::array<Point3d, 3> p{a, b, c};
-  double lo = 180;
-  for (int k = 0; k < 3; ++k) {
-    const Point3d u = sub(p[(k + 1) % 3], p[k]), v = sub(p[(k + 2) % 3], p[k]);
-    const double uu = squared_norm(u), vv = squared_norm(v);
-    if (!(uu > 0 && vv > 0)) return 0;
-    lo = std::min(lo, std::acos(std::clamp(dot(u, v) / std::sqrt(uu * vv), -1.0, 1.0)) * 180.0 / 3.14159265358979323846);
-  }
-  return lo;
+/// Where c's projection onto line ab falls: 0 at a, 1 at b (NaN when a = b).
+double position_along(const Point3d& a, const Point3d& b, const Point3d& c) {
+  return dot(sub(c, a), sub(b, a)) / squared_norm(sub(b, a));
 }
 
 /// Whether triangle abc's angles lie within [needle, cap] degrees, on
 /// doubles (for choices, not a predicate).
 bool angles_within(const Point3d& a, const Point3d& b, const Point3d& c, double needle, double cap) {
-  const std::array<Point3d, 3> p{a, b, c};
-  for (int k = 0; k < 3; ++k) {
-    const Point3d u = sub(p[(k + 1) % 3], p[k]), v = sub(p[(k + 2) % 3], p[k]);
-    const double uu = squared_norm(u), vv = squared_norm(v);
-    if (!(uu > 0 && vv > 0)) return false;
-    const double angle = std::acos(std::clamp(dot(u, v) / std::sqrt(uu * vv), -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
-    if (angle < needle || angle > cap) return false;
-  }
-  return true;
+  const auto [lo, hi] = angle_range(a, b, c);
+  return lo >= needle && hi <= cap;
 }
 
 ShapeCounts shape_counts(const Report& r) { return {r.degenerate_faces.size(), r.caps.size(), r.needles.size()}; }
@@ -343,9 +328,9 @@ class Pipeline {
   /// paper's Fig. 1). Cuts across such a strip put points on both long
   /// sides at the same places (and on the diagonal), and a strip of aspect
   /// A then needs ceil(A tan(needle angle)) pieces, each two triangles. Here
-  /// the sides get staggered points instead: with q pieces of the side
-  /// (q odd), one side gets the points at odd j/q, the other those at even
-  /// j/q, and the zigzag between them has q + 1 triangles whose smallest
+  /// the sides get staggered points instead: with q pieces of the side,
+  /// one side gets the points at odd j/q, the other those at even j/q, and
+  /// the zigzag between them has q + 1 triangles whose smallest
   /// angles are about atan(q / A) — q = 3 where cuts needed 3 pieces and
   /// 6 triangles (cgal__joint's 30:1 strips: 4 triangles each). Neighbouring
   /// strips share a side, so its points serve both: strips are visited
@@ -353,8 +338,9 @@ class Pipeline {
   /// the mirrored positions on the other (in a ring of an odd number of
   /// strips the last one is left with aligned points, and the needle rounds
   /// after it). The split points lie on the sides exactly and the faces
-  /// beside them are fanned (detail::split_edges: nothing moves); the
-  /// decimation after it (tidy()) flips each strip into its zigzag, with
+  /// beside them are fanned (detail::split_edges: nothing moves); a strip
+  /// with many points is then retriangulated as its zigzag (zigzag()), one
+  /// with few is flipped into it by the decimation after it (tidy()), with
   /// every check of an operation. Returns the points made.
   std::size_t stagger_strips() {
     refresh_frozen();
@@ -369,11 +355,11 @@ class Pipeline {
       for (halfedge_descriptor h : {CGAL::halfedge(s.a, s.b, mesh_).first, CGAL::halfedge(s.b, s.a, mesh_).first})
         in_strip.insert(mesh_.face(h));
     }
-    std::map<EdgeKey, Grid> at;  // measured from the side's smaller vertex index
+    std::map<EdgeKey, Grid> grids;  // measured from the side's smaller vertex index
     std::set<face_descriptor> fanned;  // faces beside a side with a grid (one such side each)
     auto get = [&](vertex_descriptor from, vertex_descriptor to) -> std::optional<Grid> {
-      const auto it = at.find(edge_key(from, to));
-      if (it == at.end()) return std::nullopt;
+      const auto it = grids.find(edge_key(from, to));
+      if (it == grids.end()) return std::nullopt;
       return it->second.from(from == edge_key(from, to).first);
     };
     // Grid g (measured from `from`) for the side, unless a face beside it
@@ -391,7 +377,7 @@ class Pipeline {
       for (face_descriptor f : beside)
         if (fanned.count(f) || is_frozen(f) || (!in_strip.count(f) && !fans_well(f, from, to, points))) return;
       fanned.insert(beside.begin(), beside.end());
-      at[edge_key(from, to)] = g.from(from == edge_key(from, to).first);
+      grids[edge_key(from, to)] = g.from(from == edge_key(from, to).first);
     };
     std::vector<char> visited(strips.size(), 0);
     std::size_t staggered = 0;
@@ -423,7 +409,7 @@ class Pipeline {
     std::vector<detail::EdgeSplit> splits;
     std::vector<EdgeKey> split_keys;
     std::size_t points = 0;
-    for (const auto& [side, grid] : at) {
+    for (const auto& [side, grid] : grids) {
       const auto [u, w] = side;
       detail::EdgeSplit split{CGAL::halfedge(u, w, mesh_).first, {}};
       for (double f : grid.fractions())  // exactly on the side
@@ -484,7 +470,7 @@ class Pipeline {
     if (!(n2 > 0) || off * off > 0.01 * r_.tolerance * r_.tolerance * n2) return false;
     // the zigzag, by position along each side (top a -> c, bottom d -> b)
     auto along = [&](vertex_descriptor v, const Point3d& from, const Point3d& to) {
-      return dot(sub(at(v), from), sub(to, from)) / squared_norm(sub(to, from));
+      return position_along(from, to, at(v));
     };
     std::vector<Triple> proposed;
     std::vector<char> from_top;
@@ -495,8 +481,8 @@ class Pipeline {
       if (!advance_top && i + 1 < top.size()) {
         const double t = along(top[i + 1], pa, pc), u = along(bottom[j + 1], pd, pb);
         advance_top = std::abs(t - u) < 1e-9
-                          ? smallest_angle(at(top[i]), at(bottom[j]), at(top[i + 1])) >
-                                smallest_angle(at(top[i]), at(bottom[j]), at(bottom[j + 1]))
+                          ? angle_range(at(top[i]), at(bottom[j]), at(top[i + 1])).first >
+                                angle_range(at(top[i]), at(bottom[j]), at(bottom[j + 1])).first
                           : t < u;
       }
       if (advance_top) {
@@ -512,13 +498,12 @@ class Pipeline {
       if (classify_triangle(mesh_.point(t[0]), mesh_.point(t[1]), mesh_.point(t[2]), cos_cap_, cos_needle_) !=
           Shape::fine)
         return false;
-    const face_descriptor n = mesh_.face(CGAL::halfedge(strip.b, strip.c, mesh_).first),
-                          m = mesh_.face(CGAL::halfedge(strip.a, strip.d, mesh_).first);
+    // the pieces of both faces (each is a piece of itself once its side was split)
     std::vector<face_descriptor> region;
     for (std::size_t k = 0; k < s.faces.size(); ++k)
       if (s.parents[k] == strip.n || s.parents[k] == strip.m) region.push_back(s.faces[k]);
-    if (std::find(region.begin(), region.end(), n) == region.end() ||
-        std::find(region.begin(), region.end(), m) == region.end())
+    if (std::find(region.begin(), region.end(), strip.n) == region.end() ||
+        std::find(region.begin(), region.end(), strip.m) == region.end())
       return false;
     if (index_.would_intersect(proposed, region)) return false;
     // the region as one face, then cut along the zigzag's diagonals
@@ -591,11 +576,7 @@ class Pipeline {
   /// stands over the middle of e is cut through the apex instead
   /// (tube_edge2.42's end rings: 476 -> 508 faces when cut in pieces).
   bool on_strip(halfedge_descriptor e) const {
-    const Point3d a = approx_point3d(mesh_.point(mesh_.source(e))), b = approx_point3d(mesh_.point(mesh_.target(e)));
-    const Point3d c = approx_point3d(mesh_.point(mesh_.target(mesh_.next(e))));
-    const double length2 = squared_norm(sub(b, a));
-    if (!(length2 > 0)) return false;
-    const double t = dot(sub(c, a), sub(b, a)) / length2;
+    const double t = apex_position(e);
     return std::min(t, 1 - t) < 0.1;
   }
 
@@ -889,7 +870,7 @@ class Pipeline {
 
   /// The strips among the needles that decimation cannot serve better, with
   /// the pieces their sides need: the fewest q >= 2 whose zigzag's angles,
-  /// about atan(q w / |side|), clear 1.1 needle angles, at most 15.
+  /// about atan(q w / |side|), clear 1.1 needle angles, at most 64.
   std::vector<Strip> find_strips() const {
     const double tan_needle = std::tan(1.1 * o_.needle_angle * 3.14159265358979323846 / 180.0);
     std::vector<Strip> strips;
@@ -922,13 +903,18 @@ class Pipeline {
     return strips;
   }
 
-  /// Where the apex of h's face stands over h (0: over its source, 1: over
-  /// its target); 0.5 unless h is the face's longest edge.
+  /// Where the apex of h's face stands over h: 0 over its source, 1 over
+  /// its target (NaN when h has zero length).
+  double apex_position(halfedge_descriptor h) const {
+    return position_along(at(mesh_.source(h)), at(mesh_.target(h)), at(mesh_.target(mesh_.next(h))));
+  }
+
+  /// apex_position(h), or 0.5 unless h is its face's longest edge.
   double apex_along(halfedge_descriptor h) const {
     const Point3d a = at(mesh_.source(h)), b = at(mesh_.target(h)), c = at(mesh_.target(mesh_.next(h)));
     const double ab = squared_norm(sub(b, a));
     if (!(ab > 0) || squared_norm(sub(c, b)) > ab || squared_norm(sub(a, c)) > ab) return 0.5;
-    return dot(sub(c, a), sub(b, a)) / ab;
+    return position_along(a, b, c);
   }
 
   /// Whether side uw could go, the faces on its two sides (this one's corner

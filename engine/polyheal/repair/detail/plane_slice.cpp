@@ -13,6 +13,13 @@
 namespace polyheal::detail {
 namespace {
 
+/// A piece cut from `parent` takes its provenance and on-input flag.
+void inherit(const std::optional<FaceOriginMap>& origin, FaceFlagMap& on_input, face_descriptor child,
+             face_descriptor parent) {
+  if (origin) (*origin)[child] = (*origin)[parent];
+  on_input[child] = on_input[parent];
+}
+
 class Slicer {
  public:
   Slicer(Mesh& mesh, const Kernel::Plane_3& plane, const SliceOptions& o)
@@ -271,7 +278,7 @@ class Slicer {
     const halfedge_descriptor h = CGAL::Euler::split_face(on[0], on[1], mesh_);
     ++result_.faces_cut;
     const face_descriptor g = mesh_.face(mesh_.opposite(h));
-    inherit(g, f);
+    inherit(origin_, on_input_, g, f);
     for (face_descriptor piece : {f, g}) triangulate_quad(piece, f);
   }
 
@@ -286,17 +293,12 @@ class Slicer {
       const std::size_t k = largest_angle_corner(corners);
       const halfedge_descriptor d = CGAL::Euler::split_face(hs[k], hs[(k + 2) % 4], mesh_);
       const face_descriptor other = mesh_.face(mesh_.opposite(d));
-      inherit(other, parent);
+      inherit(origin_, on_input_, other, parent);
       result_.faces.push_back(other);
       result_.parents.push_back(parent);
     }
     result_.faces.push_back(piece);
     result_.parents.push_back(parent);
-  }
-
-  void inherit(face_descriptor child, face_descriptor parent) {
-    if (origin_) (*origin_)[child] = (*origin_)[parent];
-    on_input_[child] = on_input_[parent];
   }
 
   Mesh& mesh_;
@@ -354,8 +356,7 @@ SliceResult split_edges(Mesh& mesh, const std::vector<EdgeSplit>& splits) {
           }
           if (corners == 3 || to_apex == halfedge_descriptor() || to_point == halfedge_descriptor()) continue;
           const face_descriptor piece = mesh.face(mesh.opposite(CGAL::Euler::split_face(to_apex, to_point, mesh)));
-          if (origin) (*origin)[piece] = (*origin)[f];
-          on_input[piece] = on_input[f];
+          inherit(origin, on_input, piece, f);
           pieces.push_back(piece);
           break;
         }

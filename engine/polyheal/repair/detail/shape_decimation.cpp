@@ -23,20 +23,10 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 using Triple = std::array<vertex_descriptor, 3>;
 
-
-
 /// Shape quality of a triangle for ordering (not a predicate): its smallest
 /// angle or 180° minus its largest, whichever is smaller, in degrees.
 double quality(const Point3d& a, const Point3d& b, const Point3d& c) {
-  const std::array<Point3d, 3> p{a, b, c};
-  double lo = 180.0, hi = 0.0;
-  for (int k = 0; k < 3; ++k) {
-    const Point3d u = sub(p[(k + 1) % 3], p[k]), v = sub(p[(k + 2) % 3], p[k]);
-    const double n = std::sqrt(dot(u, u) * dot(v, v));
-    const double angle = n > 0 ? std::acos(std::clamp(dot(u, v) / n, -1.0, 1.0)) * 180.0 / kPi : 0.0;
-    lo = std::min(lo, angle);
-    hi = std::max(hi, angle);
-  }
+  const auto [lo, hi] = angle_range(a, b, c);
   return std::min(lo, 180.0 - hi);
 }
 
