@@ -79,6 +79,7 @@ nlohmann::json to_json(const CheckArgs& args, const Report& r, double read_s, do
         {"nearly_degenerate_faces", r.nearly_degenerate_faces.size()},
         {"vertices_near_edges",
          r.vertices_near_edges_checked ? json(r.vertices_near_edges.size()) : json(nullptr)},  // null: not looked for
+        {"close_vertices", r.vertices_near_edges_checked ? json(r.close_vertices.size()) : json(nullptr)},
         {"fold_angle", args.inspect.tetgen_fold_angle},
         {"epsilon", args.inspect.tetgen_epsilon}}},
       {"shape",
@@ -103,7 +104,8 @@ nlohmann::json to_json(const CheckArgs& args, const Report& r, double read_s, do
                   {"duplicate_faces", r.duplicate_faces},
                   {"sharp_folds", pairs_json(r.sharp_folds)},
                   {"nearly_degenerate_faces", r.nearly_degenerate_faces},
-                  {"vertices_near_edges", near_edges_json(r.vertices_near_edges)}};
+                  {"vertices_near_edges", near_edges_json(r.vertices_near_edges)},
+                  {"close_vertices", r.close_vertices}};
   return j;
 }
 
@@ -129,12 +131,13 @@ void print_text(const CheckArgs& args, const Report& r, double total_s) {
   std::printf("  exact: %zu degenerate faces, %zu caps (>%g deg), %zu needles (<%g deg), %zu self-intersecting pairs\n",
               r.degenerate_faces.size(), r.caps.size(), args.inspect.cap_angle, r.needles.size(),
               args.inspect.needle_angle, r.self_intersections.size());
-  const std::string near = r.vertices_near_edges_checked ? std::to_string(r.vertices_near_edges.size())
-                                                          : std::string("(not looked for: --tetgen-ready)");
+  const bool looked = r.vertices_near_edges_checked;
+  const std::string near = looked ? std::to_string(r.vertices_near_edges.size()) : std::string("(not looked for: --tetgen-ready)");
+  const std::string close = looked ? std::to_string(r.close_vertices.size()) : std::string("(not looked for)");
   std::printf("  tetgen tolerances: %zu sharp folds (<%g deg), %zu nearly degenerate faces, %s vertices nearly on an "
-              "edge (eps %g)\n",
+              "edge, %s vertex pairs closer than its shortest edge (eps %g)\n",
               r.sharp_folds.size(), args.inspect.tetgen_fold_angle, r.nearly_degenerate_faces.size(), near.c_str(),
-              args.inspect.tetgen_epsilon);
+              close.c_str(), args.inspect.tetgen_epsilon);
   if (r.closed && r.oriented) std::printf("  signed volume %.17g\n", r.signed_volume);
   if (args.list) {
     auto num = [](const std::size_t& x) { return std::to_string(x); };
@@ -160,6 +163,10 @@ void print_text(const CheckArgs& args, const Report& r, double total_s) {
                                  return std::to_string(v.vertex) + ":(" + std::to_string(v.a) + "," +
                                         std::to_string(v.b) + ")";
                                });
+    print_list<std::array<Index, 2>>("vertex pairs closer than TetGen's shortest edge", r.close_vertices,
+                                     [](const std::array<Index, 2>& p) {
+                                       return "(" + std::to_string(p[0]) + "," + std::to_string(p[1]) + ")";
+                                     });
   }
   const bool ok = args.tetgen_ready ? r.tetgen_ready() : r.certified_clean();
   std::printf("  => %s (%.3f s)\n",

@@ -66,18 +66,6 @@ double off_surface(const Soup& input, const Soup& output) {
   return m;
 }
 
-std::set<std::array<Point3d, 3>> faces_by_position(const Soup& s) {
-  std::set<std::array<Point3d, 3>> out;
-  for (std::size_t f = 0; f < s.face_count(); ++f) {
-    const FaceView v = s.face(f);
-    // rotate so the smallest corner comes first (same orientation)
-    std::array<Point3d, 3> t{s.points[v[0]], s.points[v[1]], s.points[v[2]]};
-    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
-    out.insert(t);
-  }
-  return out;
-}
-
 }  // namespace
 
 TEST_CASE("regularize: two overlapping boxes become their union, untouched faces kept bit for bit") {
@@ -92,7 +80,7 @@ TEST_CASE("regularize: two overlapping boxes become their union, untouched faces
   CHECK(rep.signed_volume == Approx(volume(a) + volume(b) - volume(meet(a, b))).epsilon(1e-12));
   CHECK(off_surface(in, out) < 1e-12);
   // an input face that meets nothing and lies outside the other box is output as it was
-  const auto kept = faces_by_position(out);
+  const auto kept = test::faces_by_position(out);
   std::size_t expected = 0, found = 0;
   const std::set<std::size_t> crossing = [&] {
     std::set<std::size_t> s;
@@ -111,7 +99,7 @@ TEST_CASE("regularize: two overlapping boxes become their union, untouched faces
     ++expected;
     const Soup one = test::soup({in.points[in.face(f)[0]], in.points[in.face(f)[1]], in.points[in.face(f)[2]]},
                                 {{0, 1, 2}});
-    found += kept.count(*faces_by_position(one).begin());
+    found += kept.count(*test::faces_by_position(one).begin());
   }
   CHECK(expected > 0);
   CHECK(found == expected);
@@ -165,7 +153,7 @@ TEST_CASE("regularize: a clean mesh comes back face for face, bit for bit") {
   const RegularizeResult r = regularize(in);
   CHECK(r.report.intersecting_pairs_in == 0);
   CHECK(r.report.triangles_split == 0);
-  CHECK(faces_by_position(written(r, "regularize_clean.off")) == faces_by_position(in));
+  CHECK(test::faces_by_position(written(r, "regularize_clean.off")) == test::faces_by_position(in));
 }
 
 TEST_CASE("regularize: self-overlapping and overlapping closed meshes come out certified and TetGen meshes them") {
@@ -278,7 +266,7 @@ TEST_CASE("regularize: faces with a repeated corner index are left out (they bou
   CHECK(r.report.zero_area_faces == 2);
   const Soup out = written(r, "regularize_repeated_index.off");
   CHECK(inspect(out).certified_clean());
-  CHECK(faces_by_position(out) == faces_by_position(box({{{0, 0, 0}, {1, 1, 1}}})));
+  CHECK(test::faces_by_position(out) == test::faces_by_position(box({{{0, 0, 0}, {1, 1, 1}}})));
 }
 
 TEST_CASE("regularize: a zero-area face closing a T-junction is left out, and the T-junction split (§3.1)") {

@@ -1,5 +1,6 @@
 #include "support/builders.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -97,6 +98,17 @@ bool tetgen_meshes(const std::string& path, const std::string& name, const std::
   const std::string copy = scratch(name);
   std::filesystem::copy_file(path, copy, std::filesystem::copy_options::overwrite_existing);
   return run("tetgen " + switches + " '" + copy + "' >/dev/null 2>&1; echo \"exit=$?\"").find("exit=0") != std::string::npos;
+}
+
+std::set<std::array<Point3d, 3>> faces_by_position(const Soup& s) {
+  std::set<std::array<Point3d, 3>> out;
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    const FaceView v = s.face(f);
+    std::array<Point3d, 3> t{s.points[v[0]], s.points[v[1]], s.points[v[2]]};
+    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+    out.insert(t);
+  }
+  return out;
 }
 
 }  // namespace polyheal::test

@@ -1,7 +1,9 @@
 // Test support: tiny soups built in code, fixture paths, scratch files.
 #pragma once
 
+#include <array>
 #include <initializer_list>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -19,6 +21,11 @@ Soup concat(const Soup& a, const Soup& b);
 /// A sphere of radius r about the origin: an icosahedron subdivided
 /// `levels` times, its vertices pushed onto the sphere (20 * 4^levels faces).
 Soup icosphere(double r, int levels);
+
+/// The faces as triples of corner positions, each rotated to start at its
+/// smallest corner (orientation kept): compares surfaces whatever their
+/// numbering.
+std::set<std::array<Point3d, 3>> faces_by_position(const Soup& s);
 
 std::string fixture(const std::string& name);   // path under fixtures/
 std::string scratch(const std::string& name);   // a fresh path in the build tree

@@ -270,6 +270,15 @@ bool is_nearly_on_segment(const Point3d& p, const Point3d& a, const Point3d& b, 
   });
 }
 
+bool is_closer_than(const Point3d& p, const Point3d& q, double tol) {
+  if (p == q) return false;
+  return filtered([&](auto nt) {
+    using NT = decltype(nt);
+    const Vec<NT> pq = sub<NT>(q, p);
+    return bool(dot(pq, pq) < NT(tol) * NT(tol));
+  });
+}
+
 bool lies_along_segment(const Point3d& p, const Point3d& a, const Point3d& b, double tol) {
   return filtered([&](auto nt) {
     using NT = decltype(nt);

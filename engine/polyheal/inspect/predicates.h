@@ -44,6 +44,11 @@ bool fold_angle_less(const Point3d& p, const Point3d& q, const Point3d& r, const
 /// default) without it being there.
 bool is_nearly_on_segment(const Point3d& p, const Point3d& a, const Point3d& b, double eps);
 
+/// True when p and q are distinct and strictly closer than `tol` (exactly:
+/// |pq|^2 < tol^2 on the doubles given): TetGen merges two such points
+/// when tol is its shortest allowed edge (-T times the bbox diagonal).
+bool is_closer_than(const Point3d& p, const Point3d& q, double tol);
+
 /// True when p projects strictly between a and b, lies farther than `tol`
 /// from both, and within `tol` of the line ab (absolute; tol 0: exactly on
 /// it): a T-junction vertex of edge ab.

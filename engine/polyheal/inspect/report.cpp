@@ -159,6 +159,10 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
       r.bbox_max[a] = std::max(r.bbox_max[a], p[a]);
     }
   if (soup.points.empty()) r.bbox_min = r.bbox_max = {0, 0, 0};
+
+  // TetGen: two points closer than its shortest edge (-T times the bbox
+  // diagonal, its 'minedgelength') become one.
+  if (o.tetgen_segments) r.close_vertices = find_close_points(soup, o.tetgen_epsilon * bbox_diagonal(r));
   long double volume = 0;
   for (std::size_t f = 0; f < r.faces; ++f) {
     FaceView v = soup.face(f);

@@ -68,6 +68,10 @@ struct Report {
   std::vector<std::size_t> nearly_degenerate_faces;
   std::vector<VertexNearEdge> vertices_near_edges;  // welded ids; a vertex within tetgen_epsilon of an edge
   bool vertices_near_edges_checked = false;         // InspectOptions::tetgen_segments
+  /// Welded ids (a < b) closer than tetgen_epsilon x the bbox diagonal:
+  /// TetGen merges them ("very short edge"), its faces then repeat a corner
+  /// and it stops. Searched for with vertices_near_edges.
+  std::vector<std::array<Index, 2>> close_vertices;
   // shape
   bool closed = false, manifold = false, oriented = false;
   double signed_volume = 0.0;  // double sum of tetrahedra; meaningful when closed and oriented
@@ -82,7 +86,7 @@ struct Report {
   /// (false unless inspected with InspectOptions::tetgen_segments).
   bool tetgen_ready() const {
     return certified_clean() && sharp_folds.empty() && nearly_degenerate_faces.empty() &&
-           vertices_near_edges_checked && vertices_near_edges.empty();
+           vertices_near_edges_checked && vertices_near_edges.empty() && close_vertices.empty();
   }
 };
 

@@ -212,6 +212,31 @@ void for_each_point_near_edge(const std::vector<Point3d>& points, const std::vec
                            CGAL::Box_intersection_d::Box_traits_d<Box>(), kCutoff);
 }
 
+std::vector<std::array<Index, 2>> find_close_points(const Soup& soup, double tol) {
+  std::vector<std::array<Index, 2>> out;
+  if (!(tol > 0)) return out;
+  std::vector<Box> boxes;
+  boxes.reserve(soup.points.size());
+  const double half = 0.5 * tol * (1 + 1e-9);  // two boxes meet when their points are within tol on every axis
+  for (std::size_t v = 0; v < soup.points.size(); ++v) {
+    double lo[3], hi[3];
+    for (int c = 0; c < 3; ++c) {
+      lo[c] = std::nextafter(soup.points[v][c] - half, -std::numeric_limits<double>::infinity());
+      hi[c] = std::nextafter(soup.points[v][c] + half, std::numeric_limits<double>::infinity());
+    }
+    boxes.emplace_back(lo, hi, static_cast<std::uint32_t>(v));
+  }
+  CGAL::box_self_intersection_d<CGAL::Sequential_tag>(
+      boxes.begin(), boxes.end(),
+      [&](const Box& p, const Box& q) {
+        const Index a = static_cast<Index>(std::min(p.info(), q.info())), b = static_cast<Index>(std::max(p.info(), q.info()));
+        if (is_closer_than(soup.points[a], soup.points[b], tol)) out.push_back({a, b});
+      },
+      CGAL::Box_intersection_d::Box_traits_d<Box>(), kCutoff);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 std::vector<VertexNearEdge> find_vertices_near_edges(const Soup& soup, const std::vector<std::array<Index, 2>>& edges,
                                                      double eps) {
   std::vector<VertexNearEdge> out;

@@ -56,6 +56,14 @@ void for_each_point_near_edge(const std::vector<Point3d>& points, const std::vec
                               const std::vector<Index>* candidates, const std::function<double(std::size_t)>& grow,
                               const std::function<void(Index, std::size_t)>& near);
 
+/// Every pair of distinct points of `soup` (a < b) closer than `tol`
+/// (predicates.h is_closer_than), sorted: with tol TetGen's shortest edge
+/// (its -T tolerance times the bbox diagonal), the points it would merge
+/// into one ("Avoid creating a very short edge"), leaving faces with two
+/// identical corners that stop it. Identical points are not pairs (weld
+/// first).
+std::vector<std::array<Index, 2>> find_close_points(const Soup& soup, double tol);
+
 /// Every point of `soup` nearly on (predicates.h is_nearly_on_segment, eps)
 /// one of `edges` (index pairs into soup.points), sorted.
 std::vector<VertexNearEdge> find_vertices_near_edges(const Soup& soup, const std::vector<std::array<Index, 2>>& edges,

@@ -1,6 +1,12 @@
 #include "polyheal/mesh/weld.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <unordered_map>
+
+#include "polyheal/mesh/union_find.h"
 
 namespace polyheal {
 namespace {
@@ -69,5 +75,48 @@ Soup apply_weld(const Soup& soup, const Weld& weld) {
   for (Index& i : out.indices) i = weld.representative[i];
   return out;
 }
+
+std::vector<Index> weld_near_points(const std::vector<Point3d>& pts, const std::vector<Index>& identical, double d,
+                             std::size_t& merged, double& max_move) {
+  UnionFind uf(pts.size());
+  std::unordered_map<std::uint64_t, std::vector<Index>> grid;
+  auto cell = [&](double x) { return std::int64_t(std::floor(x / d)); };
+  auto key = [](std::int64_t i, std::int64_t j, std::int64_t k) {
+    return (std::uint64_t(i & 0x1FFFFF) << 42) | (std::uint64_t(j & 0x1FFFFF) << 21) | std::uint64_t(k & 0x1FFFFF);
+  };
+  for (Index v = 0; v < pts.size(); ++v) {
+    if (identical[v] != v) continue;
+    const std::int64_t ci = cell(pts[v][0]), cj = cell(pts[v][1]), ck = cell(pts[v][2]);
+    for (std::int64_t i = ci - 1; i <= ci + 1; ++i)
+      for (std::int64_t j = cj - 1; j <= cj + 1; ++j)
+        for (std::int64_t k = ck - 1; k <= ck + 1; ++k) {
+          auto it = grid.find(key(i, j, k));
+          if (it == grid.end()) continue;
+          for (Index w : it->second) {
+            double s = 0;
+            for (int c = 0; c < 3; ++c) s += (pts[v][c] - pts[w][c]) * (pts[v][c] - pts[w][c]);
+            if (s <= d * d) uf.unite(v, w);
+          }
+        }
+    grid[key(ci, cj, ck)].push_back(v);
+  }
+  std::vector<Index> first(pts.size(), Index(-1)), rep(pts.size());
+  for (Index v = 0; v < pts.size(); ++v) {
+    const Index root = Index(uf.find(identical[v]));
+    if (first[root] == Index(-1)) first[root] = identical[v];
+    rep[v] = first[root];
+  }
+  merged = 0;
+  max_move = 0;
+  for (Index v = 0; v < pts.size(); ++v) {
+    if (identical[v] != v || rep[v] == v) continue;
+    ++merged;
+    double s = 0;
+    for (int c = 0; c < 3; ++c) s += (pts[v][c] - pts[rep[v]][c]) * (pts[v][c] - pts[rep[v]][c]);
+    max_move = std::max(max_move, std::sqrt(s));
+  }
+  return rep;
+}
+
 
 }  // namespace polyheal

@@ -34,52 +34,6 @@ std::uint64_t edge_key(Index a, Index b) {
   return (std::uint64_t(a) << 32) | b;
 }
 
-/// Representatives after merging points closer than `d` (a grid of cell d;
-/// clusters by union-find, so a chain can move a point further than d: the
-/// report states the largest move). The representative is the cluster's
-/// first point.
-std::vector<Index> weld_near(const std::vector<Point3d>& pts, const std::vector<Index>& identical, double d,
-                             std::size_t& merged, double& max_move) {
-  UnionFind uf(pts.size());
-  std::unordered_map<std::uint64_t, std::vector<Index>> grid;
-  auto cell = [&](double x) { return std::int64_t(std::floor(x / d)); };
-  auto key = [](std::int64_t i, std::int64_t j, std::int64_t k) {
-    return (std::uint64_t(i & 0x1FFFFF) << 42) | (std::uint64_t(j & 0x1FFFFF) << 21) | std::uint64_t(k & 0x1FFFFF);
-  };
-  for (Index v = 0; v < pts.size(); ++v) {
-    if (identical[v] != v) continue;
-    const std::int64_t ci = cell(pts[v][0]), cj = cell(pts[v][1]), ck = cell(pts[v][2]);
-    for (std::int64_t i = ci - 1; i <= ci + 1; ++i)
-      for (std::int64_t j = cj - 1; j <= cj + 1; ++j)
-        for (std::int64_t k = ck - 1; k <= ck + 1; ++k) {
-          auto it = grid.find(key(i, j, k));
-          if (it == grid.end()) continue;
-          for (Index w : it->second) {
-            double s = 0;
-            for (int c = 0; c < 3; ++c) s += (pts[v][c] - pts[w][c]) * (pts[v][c] - pts[w][c]);
-            if (s <= d * d) uf.unite(v, w);
-          }
-        }
-    grid[key(ci, cj, ck)].push_back(v);
-  }
-  std::vector<Index> first(pts.size(), Index(-1)), rep(pts.size());
-  for (Index v = 0; v < pts.size(); ++v) {
-    const Index root = Index(uf.find(identical[v]));
-    if (first[root] == Index(-1)) first[root] = identical[v];
-    rep[v] = first[root];
-  }
-  merged = 0;
-  max_move = 0;
-  for (Index v = 0; v < pts.size(); ++v) {
-    if (identical[v] != v || rep[v] == v) continue;
-    ++merged;
-    double s = 0;
-    for (int c = 0; c < 3; ++c) s += (pts[v][c] - pts[rep[v]][c]) * (pts[v][c] - pts[rep[v]][c]);
-    max_move = std::max(max_move, std::sqrt(s));
-  }
-  return rep;
-}
-
 /// Sign of the volume a closed triangle set encloses, exactly (the input
 /// coordinates are doubles; the sum of determinants is rational).
 int volume_sign(const std::vector<P3>& pts, const std::vector<std::vector<std::size_t>>& polys,
@@ -194,7 +148,7 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
   // Points closer than the T-junction tolerance are one point: the crack
   // edge between them has zero length.
   const double near = std::max(o.weld, o.t_junction);
-  if (near > 0) rep = weld_near(input.points, weld.representative, near, r.near_vertices_welded, r.max_weld_move);
+  if (near > 0) rep = weld_near_points(input.points, weld.representative, near, r.near_vertices_welded, r.max_weld_move);
 
   // Fan polygons; drop faces that repeat an index.
   std::vector<Tri> tris;

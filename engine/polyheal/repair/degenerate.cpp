@@ -1016,8 +1016,8 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   // 3. slicing
   t0 = std::chrono::steady_clock::now();
   if (o.observer) o.observer->stage("slicing caps");
-  if (o.slice_grid > 0) pipeline.slice_grid(o.slice_grid);
-  pipeline.slice_caps();
+  if (o.slice && o.slice_grid > 0) pipeline.slice_grid(o.slice_grid);
+  if (o.slice) pipeline.slice_caps();
   r.faces_after_slicing = mesh.number_of_faces();
   r.seconds_slicing = seconds_since(t0);
 
@@ -1025,7 +1025,7 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   // neighbourhood changed, so alternate while slicing makes progress
   t0 = std::chrono::steady_clock::now();
   if (o.observer) o.observer->stage("decimating needles");
-  pipeline.stagger_strips();
+  if (o.slice) pipeline.stagger_strips();
   pipeline.decimate(pipeline.bad_faces());
   // What decimation could not remove: caps whose slice was refused may be
   // sliceable now that their neighbourhood changed; stuck needles get local
@@ -1062,7 +1062,10 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
     }
     return bad;
   };
-  if (rounds() > 0) {
+  if (!o.slice) {
+    pipeline.retriangulate();
+    pipeline.decimate(pipeline.bad_faces());
+  } else if (rounds() > 0) {
     pipeline.retriangulate();
     pipeline.decimate(pipeline.bad_faces());
     rounds();

@@ -64,6 +64,7 @@ struct DegenerateOptions {
   int slice_grid = 0;            // N: three stacks of N axis-aligned planes first (§5)
   bool global_slices = false;    // the paper's global slices instead of local ones
   bool interleave = true;        // decimate along each slice right after it
+  bool slice = true;             // false: no slicing at all, only collapses, flips and vertex removals
   bool certify = true;           // certify the rounded result (callers that certify the written file say false)
   /// Degrees; > 0: faces folded onto a neighbour below this angle are bad as
   /// well and no operation makes such a fold (repair --for tetgen: TetGen's

@@ -19,6 +19,7 @@
 #include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/rebuild.h"
 #include "polyheal/repair/regularize.h"
+#include "polyheal/repair/short_edges.h"
 
 namespace polyheal {
 namespace {
@@ -40,7 +41,8 @@ struct State {
 
 /// The surface without its closed components that are no larger than
 /// `size` (bounding-box diagonal) and hold what TetGen's tolerances stop on
-/// (a sharp fold, a nearly degenerate face, a vertex nearly on an edge —
+/// (a sharp fold, a nearly degenerate face, a vertex nearly on an edge or
+/// closer than TetGen's shortest edge to another —
 /// welded ids, as the report gives them): the flat tetrahedra the
 /// grid can leave in a thin gap, which no collapse can fix (every edge of a
 /// tetrahedron fails the link condition). `dropped` counts them.
@@ -55,6 +57,7 @@ Soup without_tiny_flagged_components(const Soup& s, const Report& r, double size
   for (std::size_t f = 0; f < welded.face_count(); ++f)
     for (Index i : welded.face(f)) vertex_face[i] = f;
   for (const VertexNearEdge& v : r.vertices_near_edges) flagged[t.face_component[vertex_face[v.vertex]]] = 1;
+  for (const auto& pair : r.close_vertices) flagged[t.face_component[vertex_face[pair[0]]]] = 1;
   for (const Edge& e : t.boundary_edges) open[t.face_component[e.uses.front().face]] = 1;
   const std::vector<Region> regions = component_regions(welded, t);
   std::vector<char> drop(t.components, 0);
@@ -112,7 +115,7 @@ class Pipeline {
     }
     // TetGen's tolerances (for_tetgen): nearly degenerate faces and sharp
     // folds on a surface that is otherwise clean, before the grid is tried.
-    if (tetgen_pass_due()) tetgen_shapes();
+    if (tetgen_pass_due()) tetgen_pass();
     if (wanted(kStepRebuild) && !done()) {
       // The grid's coarsening and feature placement can fold faces below
       // TetGen's angle or leave a vertex nearly on an edge; the grid surface
@@ -120,10 +123,10 @@ class Pipeline {
       // long: collapses may move it that far again. What they cannot fix,
       // the grid without coarsening (more faces) usually avoids.
       const double cell = rebuild(true);
-      if (tetgen_pass_due()) tetgen_shapes(cell);
+      if (tetgen_pass_due()) tetgen_pass(cell);
       if (o_.for_tetgen && !done()) {
         rebuild(false);
-        if (tetgen_pass_due()) tetgen_shapes(cell);
+        if (tetgen_pass_due()) tetgen_pass(cell);
       }
     }
     result_.soup = std::move(cur_.soup);
@@ -268,12 +271,39 @@ class Pipeline {
     });
   }
 
+  /// What TetGen's tolerances stop on, on a clean surface: edges shorter
+  /// than its shortest edge collapsed first (it would merge their ends);
+  /// then what is left by collapses and flips only; then, if that is not
+  /// enough, with cap and needle slicing too. Each is kept only if better.
+  void tetgen_pass(double tolerance = -1) {
+    if (!cur_.report.close_vertices.empty()) short_edges();
+    if (tetgen_pass_due()) tetgen_shapes(tolerance, false);
+    if (tetgen_pass_due()) tetgen_shapes(tolerance, true);
+  }
+
+  void short_edges() {
+    stage("short edges (TetGen)", [&](StageReport& s) {
+      ShortEdgeReport r;
+      Soup out = collapse_short_edges(cur_.soup, ShortEdgeOptions{}, r);
+      s.max_displacement = r.max_displacement;
+      s.counts = {{"close_vertices_before", double(cur_.report.close_vertices.size())},
+                  {"collapses", double(r.collapses)},
+                  {"collapses_refused", double(r.collapses_undone)}};
+      s.outcome = std::to_string(cur_.report.close_vertices.size()) + " vertex pairs closer than TetGen's shortest edge; " +
+                  std::to_string(r.collapses) + " short edges collapsed, " + std::to_string(r.collapses_undone) +
+                  " refused (a defect around them)" + (r.gave_up ? "; gave up (a defect no collapse explains)" : "");
+      return out;
+    });
+  }
+
   /// `tolerance`: how far the operations may move the surface (model units;
   /// negative: the degenerate engine's default, 1e-3 of the diagonal).
-  void tetgen_shapes(double tolerance = -1) {
-    stage("degenerate (TetGen tolerances)", [&](StageReport& s) {
+  /// `slice`: also cut caps and needles (else collapses and flips only).
+  void tetgen_shapes(double tolerance, bool slice) {
+    stage(slice ? "degenerate (TetGen tolerances)" : "degenerate (TetGen tolerances, no slicing)", [&](StageReport& s) {
       DegenerateOptions d;
       d.tolerance = tolerance;
+      d.slice = slice;
       std::size_t dropped = 0;
       const Soup from = without_tiny_flagged_components(
           cur_.soup, cur_.report, tolerance >= 0 ? tolerance : d.tolerance_ratio * result_.report.diagonal, dropped);
@@ -479,6 +509,7 @@ std::vector<std::pair<std::string, std::size_t>> defect_kinds(const Report& r, b
     add("sharp folds", r.sharp_folds.size());
     add("nearly degenerate faces", r.nearly_degenerate_faces.size());
     add("vertices nearly on an edge", r.vertices_near_edges.size());
+    add("vertices closer than TetGen's shortest edge", r.close_vertices.size());
   }
   if (r.faces == 0) d.emplace_back("no face left", 1);
   return d;
