@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <array>
-#include <iterator>
 #include <cmath>
+#include <iterator>
 #include <vector>
 
 #include "polyheal/inspect/predicates.h"
@@ -175,6 +175,8 @@ Soup collapse_short_edges(const Soup& clean, const ShortEdgeOptions& o, ShortEdg
     const Report after = inspect(collapsed, exact);
     const std::vector<Index> involved = defect_vertices(collapsed, after);
     if (involved.empty() && after.certified_clean()) {
+      // The link condition keeps the topology; checked all the same.
+      if (!(topology_of(after) == topology_of(before))) break;
       r.collapses = collapses;
       r.faces_removed = base.face_count() - collapsed.face_count();
       for (std::size_t v = 0; v < into.size(); ++v) {

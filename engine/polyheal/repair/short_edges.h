@@ -33,7 +33,8 @@ struct ShortEdgeReport {
   std::size_t faces_removed = 0;     // two a collapse
   std::size_t collapses_undone = 0;  // refused after an inspection found a defect around them
   double max_displacement = 0;       // largest distance from a point to the one it went to
-  /// A defect no collapse explains, or max_rounds ran out: the input is
+  /// A defect no collapse explains, the topology changed (the link
+  /// condition should prevent it), or max_rounds ran out: the input is
   /// returned unchanged.
   bool gave_up = false;
 };
