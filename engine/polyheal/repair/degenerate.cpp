@@ -1016,8 +1016,10 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   // 3. slicing
   t0 = std::chrono::steady_clock::now();
   if (o.observer) o.observer->stage("slicing caps");
-  if (o.slice && o.slice_grid > 0) pipeline.slice_grid(o.slice_grid);
-  if (o.slice) pipeline.slice_caps();
+  if (o.slice) {
+    if (o.slice_grid > 0) pipeline.slice_grid(o.slice_grid);
+    pipeline.slice_caps();
+  }
   r.faces_after_slicing = mesh.number_of_faces();
   r.seconds_slicing = seconds_since(t0);
 
@@ -1062,13 +1064,10 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
     }
     return bad;
   };
-  if (!o.slice) {
+  if (!o.slice || rounds() > 0) {  // without slicing, no rounds: vertex removal at once
     pipeline.retriangulate();
     pipeline.decimate(pipeline.bad_faces());
-  } else if (rounds() > 0) {
-    pipeline.retriangulate();
-    pipeline.decimate(pipeline.bad_faces());
-    rounds();
+    if (o.slice) rounds();
   }
   pipeline.simplify_split_points();
   pipeline.finish_stats();

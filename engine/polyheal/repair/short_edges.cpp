@@ -2,12 +2,13 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
 #include <iterator>
 #include <vector>
 
 #include "polyheal/inspect/predicates.h"
 #include "polyheal/inspect/report.h"
+#include "polyheal/mesh/union_find.h"
+#include "polyheal/mesh/vec3.h"
 #include "polyheal/mesh/weld.h"
 
 namespace polyheal {
@@ -54,7 +55,6 @@ std::vector<Index> defect_vertices(const Soup& soup, const Report& r) {
   }
   return v;
 }
-
 
 /// Triangles on which edges collapse one after another (the soup's points
 /// never move: a collapse u -> v sends u's corners to v).
@@ -140,11 +140,8 @@ Soup collapse_short_edges(const Soup& clean, const ShortEdgeOptions& o, ShortEdg
     const FaceView t = base.face(f);
     for (int k = 0; k < 3; ++k) {
       const Index a = t[k], b = t[(k + 1) % 3];
-      if (a < b && is_closer_than(base.points[a], base.points[b], tol)) {
-        double s = 0;
-        for (int c = 0; c < 3; ++c) s += (base.points[a][c] - base.points[b][c]) * (base.points[a][c] - base.points[b][c]);
-        edges.push_back({s, {a, b}});
-      }
+      if (a < b && is_closer_than(base.points[a], base.points[b], tol))
+        edges.push_back({squared_norm(sub(base.points[a], base.points[b])), {a, b}});
     }
   }
   if (edges.empty()) return without_unused_points(base);
@@ -153,21 +150,16 @@ Soup collapse_short_edges(const Soup& clean, const ShortEdgeOptions& o, ShortEdg
   std::vector<char> refused(edges.size(), 0);
   for (int round = 0; round < o.max_rounds; ++round) {
     Collapser mesh(base);
-    std::vector<Index> into(base.points.size());  // where each point went
-    for (std::size_t v = 0; v < into.size(); ++v) into[v] = Index(v);
+    UnionFind into(base.points.size());  // where each point went: its set's smallest index, as a collapse keeps
     std::vector<std::vector<std::size_t>> made_into(base.points.size());  // collapses by survivor
     std::size_t collapses = 0;
     for (std::size_t e = 0; e < edges.size(); ++e) {
       if (refused[e]) continue;
-      auto find = [&](Index v) {
-        while (into[v] != v) v = into[v];
-        return v;
-      };
-      const Index a = find(edges[e].second[0]), b = find(edges[e].second[1]);
+      const Index a = Index(into.find(edges[e].second[0])), b = Index(into.find(edges[e].second[1]));
       if (a == b) continue;
       const Index keep = std::min(a, b), gone = std::max(a, b);
       if (!is_closer_than(base.points[keep], base.points[gone], tol) || !mesh.collapse(gone, keep)) continue;
-      into[gone] = keep;
+      into.unite(keep, gone);
       made_into[keep].push_back(e);
       ++collapses;
     }
@@ -179,14 +171,8 @@ Soup collapse_short_edges(const Soup& clean, const ShortEdgeOptions& o, ShortEdg
       if (!(topology_of(after) == topology_of(before))) break;
       r.collapses = collapses;
       r.faces_removed = base.face_count() - collapsed.face_count();
-      for (std::size_t v = 0; v < into.size(); ++v) {
-        Index w = Index(v);
-        while (into[w] != w) w = into[w];
-        if (w == v) continue;
-        double s = 0;
-        for (int c = 0; c < 3; ++c) s += (base.points[v][c] - base.points[w][c]) * (base.points[v][c] - base.points[w][c]);
-        r.max_displacement = std::max(r.max_displacement, std::sqrt(s));
-      }
+      for (std::size_t v = 0; v < base.points.size(); ++v)
+        r.max_displacement = std::max(r.max_displacement, norm(sub(base.points[v], base.points[into.find(v)])));
       return without_unused_points(collapsed);
     }
     // Refuse the collapses into each vertex a defect involves.
