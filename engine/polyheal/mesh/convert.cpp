@@ -209,6 +209,9 @@ Soup mesh_to_soup(const Mesh& mesh) {
 // CGAL::to_double on a lazy number is only guaranteed to a relative
 // precision of 1e-5; this is the nearest double.
 double nearest_double(const Kernel::FT& x) {
+  // A point interval holds the exact value itself (input coordinates): no
+  // rational needed, which would otherwise be built and converted per call.
+  if (x.approx().is_point()) return x.approx().inf();
   const auto& e = x.exact();
   const std::pair<double, double> iv = CGAL::to_interval(e);  // tight: equal or adjacent doubles
   if (iv.first == iv.second) return iv.first;
