@@ -59,6 +59,10 @@ nlohmann::json to_json(const DegenerateArgs& a, const DegenerateReport& r, doubl
         {"cap_slices_refused", r.cap_slices_refused},
         {"needle_slices", r.needle_slices},
         {"needle_slices_refused", r.needle_slices_refused},
+        {"apex_fans", r.apex_fans},
+        {"apex_fan_points", r.apex_fan_points},
+        {"apexes_moved", r.apexes_moved},
+        {"planar_fans", r.planar_fans},
         {"wedge_tips", r.wedge_tips},
         {"wedge_cuts", r.wedge_cuts},
         {"strips_staggered", r.strips_staggered},
@@ -73,7 +77,7 @@ nlohmann::json to_json(const DegenerateArgs& a, const DegenerateReport& r, doubl
       {"hausdorff", r.hausdorff},
       {"hausdorff_error_bound", r.hausdorff_error_bound},
       {"hausdorff_relative", r.bbox_diagonal > 0 ? r.hausdorff / r.bbox_diagonal : 0.0},
-      {"max_vertex_displacement", 0.0},
+      {"max_vertex_displacement", r.max_displacement},
       {"leftovers", leftovers},
       {"seconds",
        {{"read", read_s},
@@ -98,11 +102,11 @@ void print_text(const DegenerateArgs& a, const DegenerateReport& r) {
               r.faces_in, r.repeated_index_faces, r.faces_after_zero_area, r.faces_after_slicing, r.peak_faces,
               r.faces_out);
   std::printf("  slices: %zu grid (%zu refused), %zu cap (%zu refused, %s%s), %zu needle (%zu refused), "
-              "%zu across %zu wedge tips, %zu points staggered on %zu strips; %zu collapses, %zu flips, %zu removals; "
+              "%zu across %zu wedge tips, %zu points on %zu cone tips, %zu points staggered on %zu strips; %zu collapses, %zu flips, %zu removals; "
               "%zu split points rounded early\n",
               r.grid_slices, r.grid_slices_refused, r.cap_slices, r.cap_slices_refused,
               r.global_slices ? "global" : "local", r.interleave ? ", interleaved" : "", r.needle_slices,
-              r.needle_slices_refused, r.wedge_cuts, r.wedge_tips, r.strip_points, r.strips_staggered, r.collapses,
+              r.needle_slices_refused, r.wedge_cuts, r.wedge_tips, r.apex_fan_points, r.apex_fans, r.strip_points, r.strips_staggered, r.collapses,
               r.flips, r.removals,
               r.split_points_rounded);
   std::printf("  after:  %s\n", counts(r.after).c_str());
@@ -110,9 +114,13 @@ void print_text(const DegenerateArgs& a, const DegenerateReport& r) {
               r.topology_out.euler, r.topology_in.components, r.topology_out.components, r.topology_in.boundary_loops,
               r.topology_out.boundary_loops, r.topology_in == r.topology_out ? " (unchanged)" : " (CHANGED)");
   std::printf("  self-intersecting pairs: %zu -> %zu\n", r.self_intersections_in, r.self_intersections_out);
-  std::printf("  Hausdorff distance %.6g +- %.2g (%.3g%% of the bbox diagonal; tolerance %.6g); no vertex moved\n",
-              r.hausdorff, r.hausdorff_error_bound, r.bbox_diagonal > 0 ? 100.0 * r.hausdorff / r.bbox_diagonal : 0.0,
-              r.tolerance);
+  char moved[96] = "no vertex moved";
+  if (r.apexes_moved > 0)
+    std::snprintf(moved, sizeof moved, "max vertex displacement %.6g (%zu cone tips moved)", r.max_displacement,
+                  r.apexes_moved);
+  std::printf("  Hausdorff distance %.6g +- %.2g (%.3g%% of the bbox diagonal; tolerance %.6g); %s\n", r.hausdorff,
+              r.hausdorff_error_bound, r.bbox_diagonal > 0 ? 100.0 * r.hausdorff / r.bbox_diagonal : 0.0, r.tolerance,
+              moved);
   const std::size_t shown = a.list ? r.leftovers.size() : std::min<std::size_t>(r.leftovers.size(), 10);
   for (std::size_t k = 0; k < shown; ++k) {
     const Leftover& l = r.leftovers[k];

@@ -3,6 +3,7 @@
 //   polyheal_gen tube --edge 3.0 OUT          Yamakawa & Shimada Fig. 3 thin-walled tube
 //   polyheal_gen narrow-clearance OUT         100k clean faces + 5 such tubes (deintersect bench)
 //   polyheal_gen cylinder --segments 96 OUT   Botsch & Kobbelt Fig. 1 CAD-like cylinder
+//   polyheal_gen cone --segments 100 OUT      CAD-like cone: apex fan, base fanned from a corner
 //   polyheal_gen torus-knot --faces 1000000 OUT
 //   polyheal_gen torus OUT                    closed torus R=3, r=1
 //   polyheal_gen offset --distance D IN OUT   raw offset along area-weighted vertex normals
@@ -108,6 +109,22 @@ Soup cylinder(int n, double radius, double height) {
     s.add_triangle(top[0], top[j], top[j + 1]);
     s.add_triangle(bottom[0], bottom[j + 1], bottom[j]);
   }
+  return s;
+}
+
+/// A CAD-like cone (base radius `radius` at z = 0, apex at z = height): its
+/// side is one fan of n triangles at the apex (needles when n is large or
+/// the cone tall), its base fanned from one corner as the cylinder's caps.
+Soup cone(int n, double radius, double height) {
+  Soup s;
+  std::vector<Index> base;
+  for (int j = 0; j < n; ++j) {
+    const double a = 2 * kPi * j / n;
+    base.push_back(add(s, radius * std::cos(a), radius * std::sin(a), 0));
+  }
+  const Index apex = add(s, 0, 0, height);
+  for (int j = 0; j < n; ++j) s.add_triangle(base[j], base[(j + 1) % n], apex);
+  for (int j = 1; j + 1 < n; ++j) s.add_triangle(base[0], base[j + 1], base[j]);
   return s;
 }
 
@@ -324,6 +341,7 @@ int main(int argc, char** argv) {
     if (cmd == "tube" && pos.size() == 1) s = tube(opt("--outer", 5.0), opt("--inner", 4.8), opt("--length", 12.0), opt("--edge", 3.0));
     else if (cmd == "cylinder" && pos.size() == 1) s = cylinder(int(opt("--segments", 96)), opt("--radius", 10), opt("--height", 40));
     else if (cmd == "torus-knot" && pos.size() == 1) s = torus_knot(std::size_t(opt("--faces", 100000)), opt("--radius", 0.2));
+    else if (cmd == "cone" && pos.size() == 1) s = cone(int(opt("--segments", 100)), opt("--radius", 10), opt("--height", 10));
     else if (cmd == "torus" && pos.size() == 1) s = torus(3, 1, 48, 24);
     else if (cmd == "offset" && pos.size() == 2) s = offset(read_soup(pos[0]), opt("--distance", 0.1));
     else if (cmd == "dirty-box" && pos.size() == 1) s = dirty_box();

@@ -12,6 +12,8 @@
 
 namespace polyheal {
 
+inline constexpr double kPi = 3.14159265358979323846;
+
 inline Point3d sub(const Point3d& a, const Point3d& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
 inline Point3d add(const Point3d& a, const Point3d& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
 inline Point3d mul(const Point3d& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
@@ -30,11 +32,18 @@ inline std::pair<double, double> angle_range(const Point3d& a, const Point3d& b,
   for (int k = 0; k < 3; ++k) {
     const Point3d u = sub(p[(k + 1) % 3], p[k]), v = sub(p[(k + 2) % 3], p[k]);
     const double n = std::sqrt(dot(u, u) * dot(v, v));
-    const double angle = n > 0 ? std::acos(std::clamp(dot(u, v) / n, -1.0, 1.0)) * 180.0 / 3.14159265358979323846 : 0.0;
+    const double angle = n > 0 ? std::acos(std::clamp(dot(u, v) / n, -1.0, 1.0)) * 180.0 / kPi : 0.0;
     lo = std::min(lo, angle);
     hi = std::max(hi, angle);
   }
   return {lo, hi};
+}
+
+/// Whether triangle abc's angles lie within [needle, cap] degrees, on
+/// doubles (for choices, not a predicate).
+inline bool angles_within(const Point3d& a, const Point3d& b, const Point3d& c, double needle, double cap) {
+  const auto [lo, hi] = angle_range(a, b, c);
+  return lo >= needle && hi <= cap;
 }
 
 }  // namespace polyheal

@@ -16,6 +16,7 @@
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/vec3.h"
 #include "polyheal/mesh/weld.h"
+#include "polyheal/repair/detail/apex_fan.h"
 #include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/detail/plane_slice.h"
 #include "polyheal/repair/detail/shape_decimation.h"
@@ -32,13 +33,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 /// Where c's projection onto line ab falls: 0 at a, 1 at b (NaN when a = b).
 double position_along(const Point3d& a, const Point3d& b, const Point3d& c) {
   return dot(sub(c, a), sub(b, a)) / squared_norm(sub(b, a));
-}
-
-/// Whether triangle abc's angles lie within [needle, cap] degrees, on
-/// doubles (for choices, not a predicate).
-bool angles_within(const Point3d& a, const Point3d& b, const Point3d& c, double needle, double cap) {
-  const auto [lo, hi] = angle_range(a, b, c);
-  return lo >= needle && hi <= cap;
 }
 
 ShapeCounts shape_counts(const Report& r) { return {r.degenerate_faces.size(), r.caps.size(), r.needles.size()}; }
@@ -595,7 +589,7 @@ class Pipeline {
     const double twice_area = norm(cross(sub(c[1], c[0]), sub(c[2], c[0])));
     const double length = std::sqrt(CGAL::to_double(CGAL::squared_distance(p, q)));
     if (!(twice_area > 0) || !(length > 0)) return 2;
-    const double k = std::ceil(length * length * std::tan(1.1 * o_.needle_angle * 3.14159265358979323846 / 180.0) /
+    const double k = std::ceil(length * length * std::tan(1.1 * o_.needle_angle * kPi / 180.0) /
                                twice_area);
     return k > 8 || !(k >= 2) ? 2 : static_cast<int>(k);
   }
@@ -665,7 +659,7 @@ class Pipeline {
     };
     const double cos_half = std::sqrt(0.5);
     if (std::abs(cos_at(width, ab, ac)) > cos_half || std::abs(cos_at(width, ac, ab)) > cos_half) return 0;
-    const double rate = 1 + 0.75 * tan_t / std::tan(o_.needle_angle * 3.14159265358979323846 / 180.0);  // 1/q
+    const double rate = 1 + 0.75 * tan_t / std::tan(o_.needle_angle * kPi / 180.0);  // 1/q
     const int cuts = static_cast<int>(std::ceil(std::log(width / (0.25 * r_.tolerance)) / std::log(rate)));
     if (cuts < 1 || cuts > 48) return 0;
     // The planes go through double points (as slice_needles' do), keeping
@@ -793,6 +787,189 @@ class Pipeline {
     r_.removals = decimator_.stats().removals;
   }
 
+  /// Whether the smallest corner of face (v, b, c) at v is below the needle
+  /// angle (doubles: this only picks candidates).
+  bool needle_at(vertex_descriptor v, vertex_descriptor b, vertex_descriptor c) const {
+    const Point3d u = sub(at(b), at(v)), w = sub(at(c), at(v));
+    return std::atan2(norm(cross(u, w)), dot(u, w)) < o_.needle_angle * kPi / 180;
+  }
+  /// Whether v may move or leave: not a copy of a split pinch point.
+  bool movable(vertex_descriptor v, const std::optional<VertexIdentityMap>& identity,
+               const std::optional<Mesh::Property_map<vertex_descriptor, char>>& pinned) const {
+    return !mesh_.is_isolated(v) && !(pinned && (*pinned)[v]) && !(identity && (*identity)[v] != kOwnIdentity);
+  }
+
+  /// Plans the disc of `star` (link and faces filled in) graded around
+  /// `centre` (detail/apex_fan.h) and has the decimation replace it.
+  /// `keep` is the vertex whose exact position the centre keeps unless the
+  /// plan moves it (a cone's tip), or none (a new centre).
+  bool regrade(detail::StarReplacement& star, const Point3d& centre, std::optional<vertex_descriptor> keep) {
+    std::vector<Point3d> link;
+    for (vertex_descriptor b : star.link) link.push_back(at(b));
+    const std::optional<detail::ApexFanPlan> plan =
+        detail::plan_apex_fan(centre, link, r_.tolerance, o_.needle_angle, o_.cap_angle);
+    if (!plan) return false;
+    star.centre = keep && !plan->moved ? mesh_.point(*keep) : Point(plan->apex[0], plan->apex[1], plan->apex[2]);
+    for (const detail::ApexFanPlan::SpokePoint& p : plan->points) {
+      const Point3d q = add(centre, mul(sub(link[p.spoke], centre), p.t));
+      star.points.emplace_back(q[0], q[1], q[2]);
+    }
+    star.triangles = plan->triangles;
+    star.sectors = plan->sectors;
+    std::vector<vertex_descriptor> made;
+    if (decimator_.replace_star(star, made).empty()) return false;
+    r_.apex_fan_points += plan->points.size();
+    if (keep && plan->moved) {
+      ++r_.apexes_moved;
+      r_.max_displacement = std::max(r_.max_displacement, norm(sub(plan->apex, centre)));
+    }
+    created_.insert(created_.end(), made.begin() + (keep ? 1 : 0), made.end());
+    note_size();
+    return true;
+  }
+
+  /// The tips of CAD cones: a vertex at the needle corner of three or more
+  /// faces around it, whose star the planner of detail/apex_fan.h grades
+  /// into rings (no operation of the paper reaches it: see apex_fan.h), the
+  /// new star checked exactly by ShapeDecimator::replace_star(). The tip
+  /// keeps its exact coordinates unless the cone is too narrow for any fan
+  /// there; the new points lie on its spokes. Returns the stars replaced.
+  std::size_t remesh_apex_fans() {
+    refresh_frozen();
+    std::vector<vertex_descriptor> apexes;
+    const std::optional<VertexIdentityMap> identity = vertex_identity_map(mesh_);
+    const auto pinned = vertex_pinned_map(mesh_);
+    for (vertex_descriptor v : mesh_.vertices()) {
+      if (!movable(v, identity, pinned) || CGAL::is_border(v, mesh_)) continue;
+      std::size_t tips = 0;
+      for (halfedge_descriptor h : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_))
+        tips += needle_at(v, mesh_.source(h), mesh_.target(mesh_.next(h)));
+      if (tips >= 3) apexes.push_back(v);
+    }
+    std::size_t replaced = 0;
+    for (vertex_descriptor v : apexes) {
+      if (mesh_.is_removed(v) || CGAL::is_border(v, mesh_)) continue;
+      detail::StarReplacement star;
+      star.centre_vertex = v;
+      const halfedge_descriptor out = mesh_.opposite(mesh_.halfedge(v));  // v -> link[0]
+      bool usable = true;
+      halfedge_descriptor h = out;
+      do {  // face i is (v, link[i], link[i + 1])
+        usable = usable && !is_frozen(mesh_.face(h)) &&
+                 std::find(star.link.begin(), star.link.end(), mesh_.target(h)) == star.link.end();
+        star.link.push_back(mesh_.target(h));
+        star.faces.push_back(mesh_.face(h));
+        h = mesh_.opposite(mesh_.prev(h));
+      } while (h != out && usable);
+      star.sector_faces = star.faces;
+      if (usable && regrade(star, at(v), v)) ++replaced;
+    }
+    r_.apex_fans += replaced;
+    return replaced;
+  }
+
+  /// CAD's fan-tessellated planar faces (a cone's or cylinder's base fanned
+  /// from one corner of its polygon, needles at that corner): the fan's
+  /// polygon, if convex, graded around its centroid instead, as a flat
+  /// cone's tip (regrade()). Its corners stay; the new points lie inside it.
+  std::size_t remesh_planar_fans() {
+    refresh_frozen();
+    std::size_t replaced = 0;
+    for (vertex_descriptor v : mesh_.vertices()) {
+      if (mesh_.is_removed(v) || mesh_.is_isolated(v)) continue;
+      // v's outgoing halfedges in the faces' order (face of h: (v, b, next))
+      std::vector<halfedge_descriptor> around;
+      std::size_t tips = 0;
+      {
+        halfedge_descriptor h = mesh_.opposite(mesh_.halfedge(v));
+        do {
+          around.push_back(h);
+          if (!mesh_.is_border(h)) tips += needle_at(v, mesh_.target(h), mesh_.target(mesh_.next(h)));
+          h = mesh_.opposite(mesh_.prev(h));
+        } while (h != around.front());
+      }
+      if (tips < 3) continue;
+      const std::size_t m = around.size();
+      auto joined = [&](std::size_t i) {  // face i continues the plane of face i - 1
+        const halfedge_descriptor p = around[(i + m - 1) % m], h = around[i];
+        return !mesh_.is_border(p) && !mesh_.is_border(h) && coplanar_faces(mesh_.face(p), mesh_.face(h));
+      };
+      std::size_t start = m;
+      for (std::size_t i = 0; i < m && start == m; ++i)
+        if (!joined(i)) start = i;
+      if (start == m) continue;  // one plane all around v: remesh_apex_fans()' case
+      for (std::size_t k = 0; k < m;) {
+        std::vector<halfedge_descriptor> run{around[(start + k) % m]};
+        for (++k; k < m && joined((start + k) % m); ++k) run.push_back(around[(start + k) % m]);
+        std::size_t needles = 0;
+        for (halfedge_descriptor h : run)
+          if (!mesh_.is_border(h)) needles += needle_at(v, mesh_.target(h), mesh_.target(mesh_.next(h)));
+        if (needles >= 3 && !mesh_.is_border(run.front()) && regrade_planar_fan(v, run)) {
+          ++replaced;
+          break;  // v's star changed
+        }
+      }
+    }
+    r_.planar_fans += replaced;
+    return replaced;
+  }
+
+  /// Faces f and g in one plane, exactly (on Epick when every corner is a
+  /// double, as on CAD input: coplanarity is the degenerate case, where the
+  /// lazy kernel's filter always falls back to rationals).
+  bool coplanar_faces(face_descriptor f, face_descriptor g) const {
+    std::array<Point, 6> p;
+    std::size_t n = 0;
+    for (face_descriptor k : {f, g})
+      for (vertex_descriptor w : CGAL::vertices_around_face(mesh_.halfedge(k), mesh_)) p[n++] = mesh_.point(w);
+    if (std::all_of(p.begin(), p.end(), is_double_point)) {
+      std::array<InputKernel::Point_3, 6> q;
+      std::transform(p.begin(), p.end(), q.begin(), to_input_point);
+      return coplanar_corners(q);
+    }
+    return coplanar_corners(p);
+  }
+  template <class P>
+  static bool coplanar_corners(const std::array<P, 6>& p) {
+    if (CGAL::collinear(p[0], p[1], p[2])) return false;
+    for (std::size_t i = 3; i < 6; ++i)
+      if (!CGAL::coplanar(p[0], p[1], p[2], p[i])) return false;
+    return true;
+  }
+
+  /// The fan of `run` (v's consecutive coplanar faces (v, b_j, b_{j+1})):
+  /// its polygon (v, b_0, ..., b_k) graded around its centroid, if convex.
+  bool regrade_planar_fan(vertex_descriptor v, const std::vector<halfedge_descriptor>& run) {
+    detail::StarReplacement star;
+    star.link.push_back(v);
+    star.sector_faces.push_back(mesh_.face(run.front()));
+    for (halfedge_descriptor h : run) {
+      if (is_frozen(mesh_.face(h))) return false;
+      star.link.push_back(mesh_.target(h));
+      star.faces.push_back(mesh_.face(h));
+      star.sector_faces.push_back(mesh_.face(h));
+    }
+    star.link.push_back(mesh_.target(mesh_.next(run.back())));
+    star.sector_faces.push_back(mesh_.face(run.back()));
+    std::vector<vertex_descriptor> sorted = star.link;
+    std::sort(sorted.begin(), sorted.end());
+    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) return false;
+    // strictly convex (doubles: the exact checks of replace_star() follow)
+    const std::size_t n = star.link.size();
+    std::vector<Point3d> p;
+    Point3d centroid{0, 0, 0};
+    for (vertex_descriptor b : star.link) {
+      p.push_back(at(b));
+      centroid = add(centroid, p.back());
+    }
+    centroid = mul(centroid, 1.0 / double(n));
+    const Point3d normal = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+    for (std::size_t i = 0; i < n; ++i)
+      if (!(dot(cross(sub(p[(i + 1) % n], p[i]), sub(p[(i + 2) % n], p[(i + 1) % n])), normal) > 0)) return false;
+    if (!regrade(star, centroid, std::nullopt)) return false;
+    return true;
+  }
+
   /// Input faces (by id) that intersect another: slices leave them whole
   /// (SliceOptions::frozen) while they still do (refresh_frozen()).
   void freeze(const std::vector<FacePair>& intersecting, std::size_t faces) {
@@ -872,7 +1049,7 @@ class Pipeline {
   /// the pieces their sides need: the fewest q >= 2 whose zigzag's angles,
   /// about atan(q w / |side|), clear 1.1 needle angles, at most 64.
   std::vector<Strip> find_strips() const {
-    const double tan_needle = std::tan(1.1 * o_.needle_angle * 3.14159265358979323846 / 180.0);
+    const double tan_needle = std::tan(1.1 * o_.needle_angle * kPi / 180.0);
     std::vector<Strip> strips;
     for (auto e : mesh_.edges()) {
       if (mesh_.is_border(e)) continue;
@@ -1027,7 +1204,11 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   // neighbourhood changed, so alternate while slicing makes progress
   t0 = std::chrono::steady_clock::now();
   if (o.observer) o.observer->stage("decimating needles");
-  if (o.slice) pipeline.stagger_strips();
+  if (o.slice) {
+    pipeline.remesh_planar_fans();
+    pipeline.remesh_apex_fans();
+    pipeline.stagger_strips();
+  }
   pipeline.decimate(pipeline.bad_faces());
   // What decimation could not remove: caps whose slice was refused may be
   // sliceable now that their neighbourhood changed; stuck needles get local

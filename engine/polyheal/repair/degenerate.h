@@ -103,6 +103,10 @@ struct DegenerateReport {
   std::size_t grid_slices = 0, grid_slices_refused = 0;
   std::size_t cap_slices = 0, cap_slices_refused = 0;
   std::size_t needle_slices = 0, needle_slices_refused = 0;
+  std::size_t apex_fans = 0, apex_fan_points = 0;  // remesh_apex_fans(): cone tips graded anew, points made
+  std::size_t planar_fans = 0;  // remesh_planar_fans(): planar faces fanned from a corner, graded anew
+  std::size_t apexes_moved = 0;  // ... tips of cones too narrow for any fan there, moved inward along the axis
+  double max_displacement = 0;   // the farthest any input vertex moved (only such tips move)
   std::size_t wedge_tips = 0, wedge_cuts = 0;  // cut_wedge(): tips given a series of cuts, cuts made
   std::size_t strips_staggered = 0, strip_points = 0;  // stagger_strips(): strips given side points, points
   std::size_t strip_zigzags = 0;  // ... strips retriangulated directly as the zigzag between them

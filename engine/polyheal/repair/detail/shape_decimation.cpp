@@ -9,6 +9,7 @@
 #include <limits>
 #include <optional>
 #include <queue>
+#include <stdexcept>
 #include <unordered_map>
 
 #include "polyheal/inspect/exact_predicates.h"
@@ -20,7 +21,6 @@
 namespace polyheal::detail {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 using Triple = std::array<vertex_descriptor, 3>;
 
 /// Shape quality of a triangle for ordering (not a predicate): its smallest
@@ -563,6 +563,100 @@ struct ShapeDecimator::Impl {
     return changed;
   }
 
+  /// ShapeDecimator::replace_star(): the disc's faces are `replaced`, a
+  /// centre vertex is h's source (a displaced point, like a collapse's), and
+  /// the new vertices exist, isolated, while the plan is checked.
+  std::vector<face_descriptor> replace_star(const StarReplacement& r, std::vector<vertex_descriptor>& made) {
+    const std::size_t n = r.link.size();
+    if (n < 3 || r.sector_faces.size() != n || r.triangles.size() != r.sectors.size()) return {};
+    // the disc: its boundary edges are the link's, inside it; a triangulated
+    // disc with I interior vertices has n - 2 + 2I faces
+    const std::size_t interior = r.centre_vertex ? 1 : 0;
+    if (r.faces.size() != n - 2 + 2 * interior) return {};
+    auto in_disc = [&](face_descriptor f) { return std::find(r.faces.begin(), r.faces.end(), f) != r.faces.end(); };
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto [h, found] = CGAL::halfedge(r.link[i], r.link[(i + 1) % n], mesh);
+      if (!found || mesh.is_border(h) || mesh.face(h) != r.sector_faces[i] || !in_disc(mesh.face(h)) ||
+          mesh.is_border(mesh.opposite(h)) || in_disc(mesh.face(mesh.opposite(h))))
+        return {};
+    }
+    if (r.centre_vertex) {
+      const vertex_descriptor c = *r.centre_vertex;
+      if ((pinned && (*pinned)[c]) || CGAL::is_border(c, mesh)) return {};
+      for (face_descriptor f : CGAL::faces_around_target(mesh.halfedge(c), mesh))
+        if (!in_disc(f)) return {};
+    }
+    std::vector<vertex_descriptor> id{mesh.add_vertex(r.centre)};
+    id.insert(id.end(), r.link.begin(), r.link.end());
+    for (const Point& p : r.points) id.push_back(mesh.add_vertex(p));
+    auto discard = [&]() {
+      for (std::size_t k = 0; k < id.size(); ++k)
+        if (k == 0 || k > n) mesh.remove_vertex(id[k]);
+      return std::vector<face_descriptor>{};
+    };
+    Plan plan;
+    // for_each_displaced() takes h's source: the centre vertex, or a corner kept
+    plan.h = r.centre_vertex ? mesh.opposite(mesh.halfedge(*r.centre_vertex))
+                             : CGAL::halfedge(r.link[0], r.link[1], mesh).first;
+    plan.replaced = r.faces;
+    for (std::size_t t = 0; t < r.triangles.size(); ++t) {
+      const Triple tri{id[r.triangles[t][0]], id[r.triangles[t][1]], id[r.triangles[t][2]]};
+      if (classify_triangle(mesh.point(tri[0]), mesh.point(tri[1]), mesh.point(tri[2]), cos_cap, cos_needle) !=
+          Shape::fine)
+        return discard();
+      // against the star faces in the middle of its span: across a narrow
+      // cone, the faces at the ends of a wide span face away from each other
+      const std::size_t first = r.sectors[t][0], span = (r.sectors[t][1] + n - first) % n;
+      for (std::size_t i : {(first + span / 2) % n, (first + (span + 1) / 2) % n})
+        if (!same_side(corners(r.sector_faces[i]), tri)) return discard();
+      plan.proposed.push_back(tri);
+    }
+    if (!acceptable(plan) || !within_tolerance(plan) || index.would_intersect(plan.proposed, plan.replaced))
+      return discard();
+
+    std::vector<Point3d> displaced;
+    for_each_displaced(plan, [&](const Point3d& p) { displaced.push_back(p); });
+    const std::optional<FaceOriginMap> origin = face_origin_map(mesh);
+    std::vector<std::int64_t> origins;
+    for (face_descriptor f : r.sector_faces) origins.push_back(origin ? (*origin)[f] : -1);
+    for (face_descriptor f : r.faces) {
+      attached.erase(static_cast<std::uint32_t>(f));
+      index.remove(f);
+    }
+    // the disc as one face, then a hole the new faces fill, outermost first
+    halfedge_descriptor hole;
+    if (r.centre_vertex) {
+      hole = CGAL::Euler::remove_center_vertex(mesh.halfedge(*r.centre_vertex), mesh);
+    } else {  // no interior vertex: the dual is a tree, each inner edge joins two faces
+      std::vector<halfedge_descriptor> inner;
+      for (face_descriptor f : r.faces)
+        for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh.halfedge(f), mesh))
+          if (!mesh.is_border(mesh.opposite(h)) && in_disc(mesh.face(mesh.opposite(h))) && h < mesh.opposite(h))
+            inner.push_back(h);
+      for (halfedge_descriptor h : inner) {
+        if (mesh.face(h) == mesh.face(mesh.opposite(h))) throw std::logic_error("replace_star: the faces are no disc");
+        CGAL::Euler::join_face(h, mesh);
+      }
+      hole = CGAL::halfedge(r.link[0], r.link[1], mesh).first;
+    }
+    CGAL::Euler::remove_face(hole, mesh);
+    std::vector<face_descriptor> faces;
+    for (std::size_t t = 0; t < plan.proposed.size(); ++t) {
+      const Triple& tri = plan.proposed[t];
+      const face_descriptor f = mesh.add_face(tri[0], tri[1], tri[2]);
+      if (f == Mesh::null_face()) throw std::logic_error("replace_star: a planned face does not fit its hole");
+      on_input[f] = 0;
+      if (origin) (*origin)[f] = origins[r.sectors[t][0]];
+      faces.push_back(f);
+    }
+    index.update(faces);
+    attach(displaced, faces);
+    ++stats.stars;
+    made.push_back(id[0]);
+    made.insert(made.end(), id.begin() + 1 + n, id.end());
+    return faces;
+  }
+
   void attach(const std::vector<Point3d>& points, const std::vector<face_descriptor>& faces) {
     if (faces.empty()) return;
     std::vector<Triple> tris;
@@ -645,6 +739,10 @@ void ShapeDecimator::run(const std::vector<face_descriptor>& faces, const std::v
 void ShapeDecimator::simplify(const std::vector<vertex_descriptor>& vertices) { impl_->simplify(vertices); }
 void ShapeDecimator::reattach(const std::vector<face_descriptor>& faces, const std::vector<face_descriptor>& parents) {
   impl_->reattach(faces, parents);
+}
+std::vector<face_descriptor> ShapeDecimator::replace_star(const StarReplacement& r,
+                                                          std::vector<vertex_descriptor>& made) {
+  return impl_->replace_star(r, made);
 }
 void ShapeDecimator::set_retriangulate(bool on) { impl_->retriangulate = on; }
 bool ShapeDecimator::is_bad(face_descriptor f) const { return impl_->is_bad(f); }

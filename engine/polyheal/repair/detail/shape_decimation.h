@@ -35,8 +35,10 @@
 // triangle wins; bad faces are treated worst first.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "polyheal/mesh/mesh.h"
@@ -69,6 +71,27 @@ struct DecimationStats {
   std::size_t collapses = 0;
   std::size_t flips = 0;
   std::size_t removals = 0;  // vertices removed with their hole triangulated anew (set_retriangulate())
+  std::size_t stars = 0;     // stars replaced (replace_star())
+};
+
+/// A new triangulation of a disc of faces: the star of an interior vertex
+/// (detail/apex_fan.h plans one for a cone's tip), or a fan of coplanar
+/// faces around a boundary corner of their polygon (given a centre inside).
+/// Vertex ids of `triangles`: 0 is the centre (a new vertex at `centre`),
+/// 1 + i is link[i], 1 + n + k a new vertex at points[k] (n = link.size()).
+struct StarReplacement {
+  /// The disc's boundary, in its faces' orientation: edge i runs from
+  /// link[i] to link[i + 1 mod n].
+  std::vector<vertex_descriptor> link;
+  /// The faces replaced; with a centre vertex, exactly its star, and that
+  /// vertex goes (its position is a displaced point, like a collapse's).
+  std::vector<face_descriptor> faces;
+  std::optional<vertex_descriptor> centre_vertex;
+  std::vector<face_descriptor> sector_faces;  // per boundary edge i, its face in the disc
+  Point centre;
+  std::vector<Point> points;
+  std::vector<std::array<std::size_t, 3>> triangles;  // oriented as the disc's faces
+  std::vector<std::array<std::size_t, 2>> sectors;    // per triangle: the boundary edges it spans, first to last
 };
 
 class ShapeDecimator {
@@ -98,6 +121,15 @@ class ShapeDecimator {
   /// Whether run() and simplify() may also remove a vertex with its hole
   /// triangulated anew for the best worst shape (off by default).
   void set_retriangulate(bool on);
+
+  /// Replaces the disc by `r.triangles` if, exactly, every one is fine (no
+  /// needle, cap or zero area), none turns against the faces in the middle
+  /// of the boundary edges it spans,
+  /// none folds or intersects another face, and the tolerance holds both
+  /// ways (the disc's surface and its centre vertex near the new faces). Returns
+  /// the new faces (and appends the new vertices, the centre's first, to
+  /// `made`); nothing, the mesh unchanged, when refused.
+  std::vector<face_descriptor> replace_star(const StarReplacement& r, std::vector<vertex_descriptor>& made);
 
   bool is_bad(face_descriptor f) const;
   const DecimationStats& stats() const;
