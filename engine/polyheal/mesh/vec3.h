@@ -23,6 +23,8 @@ inline Point3d cross(const Point3d& a, const Point3d& b) {
 }
 inline double squared_norm(const Point3d& a) { return dot(a, a); }
 inline double norm(const Point3d& a) { return std::sqrt(dot(a, a)); }
+/// The angle between a and b in radians (atan2: accurate near 0 and pi).
+inline double angle_between(const Point3d& a, const Point3d& b) { return std::atan2(norm(cross(a, b)), dot(a, b)); }
 
 /// Triangle abc's smallest and largest angles, in degrees (an angle at a
 /// corner with a zero-length side counts as 0).

@@ -791,12 +791,19 @@ class Pipeline {
   /// angle (doubles: this only picks candidates).
   bool needle_at(vertex_descriptor v, vertex_descriptor b, vertex_descriptor c) const {
     const Point3d u = sub(at(b), at(v)), w = sub(at(c), at(v));
-    return std::atan2(norm(cross(u, w)), dot(u, w)) < o_.needle_angle * kPi / 180;
+    return angle_between(u, w) < o_.needle_angle * kPi / 180;
   }
-  /// Whether v may move or leave: not a copy of a split pinch point.
-  bool movable(vertex_descriptor v, const std::optional<VertexIdentityMap>& identity,
-               const std::optional<Mesh::Property_map<vertex_descriptor, char>>& pinned) const {
-    return !mesh_.is_isolated(v) && !(pinned && (*pinned)[v]) && !(identity && (*identity)[v] != kOwnIdentity);
+  /// v's outgoing halfedges in its faces' order: the face of each h, if
+  /// any, is (v, target(h), target(next(h))), and the next h starts there.
+  std::vector<halfedge_descriptor> outgoing(vertex_descriptor v) const {
+    std::vector<halfedge_descriptor> around;
+    const halfedge_descriptor first = mesh_.opposite(mesh_.halfedge(v));
+    halfedge_descriptor h = first;
+    do {
+      around.push_back(h);
+      h = mesh_.opposite(mesh_.prev(h));
+    } while (h != first);
+    return around;
   }
 
   /// Plans the disc of `star` (link and faces filled in) graded around
@@ -840,7 +847,10 @@ class Pipeline {
     const std::optional<VertexIdentityMap> identity = vertex_identity_map(mesh_);
     const auto pinned = vertex_pinned_map(mesh_);
     for (vertex_descriptor v : mesh_.vertices()) {
-      if (!movable(v, identity, pinned) || CGAL::is_border(v, mesh_)) continue;
+      // a copy of a split pinch point stays where it is
+      if (mesh_.is_isolated(v) || (pinned && (*pinned)[v]) || (identity && (*identity)[v] != kOwnIdentity) ||
+          CGAL::is_border(v, mesh_))
+        continue;
       std::size_t tips = 0;
       for (halfedge_descriptor h : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_))
         tips += needle_at(v, mesh_.source(h), mesh_.target(mesh_.next(h)));
@@ -851,16 +861,16 @@ class Pipeline {
       if (mesh_.is_removed(v) || CGAL::is_border(v, mesh_)) continue;
       detail::StarReplacement star;
       star.centre_vertex = v;
-      const halfedge_descriptor out = mesh_.opposite(mesh_.halfedge(v));  // v -> link[0]
       bool usable = true;
-      halfedge_descriptor h = out;
-      do {  // face i is (v, link[i], link[i + 1])
-        usable = usable && !is_frozen(mesh_.face(h)) &&
-                 std::find(star.link.begin(), star.link.end(), mesh_.target(h)) == star.link.end();
+      for (halfedge_descriptor h : outgoing(v)) {  // face i is (v, link[i], link[i + 1])
+        if (is_frozen(mesh_.face(h)) ||
+            std::find(star.link.begin(), star.link.end(), mesh_.target(h)) != star.link.end()) {
+          usable = false;
+          break;
+        }
         star.link.push_back(mesh_.target(h));
         star.faces.push_back(mesh_.face(h));
-        h = mesh_.opposite(mesh_.prev(h));
-      } while (h != out && usable);
+      }
       star.sector_faces = star.faces;
       if (usable && regrade(star, at(v), v)) ++replaced;
     }
@@ -877,19 +887,13 @@ class Pipeline {
     std::size_t replaced = 0;
     for (vertex_descriptor v : mesh_.vertices()) {
       if (mesh_.is_removed(v) || mesh_.is_isolated(v)) continue;
-      // v's outgoing halfedges in the faces' order (face of h: (v, b, next))
-      std::vector<halfedge_descriptor> around;
-      std::size_t tips = 0;
-      {
-        halfedge_descriptor h = mesh_.opposite(mesh_.halfedge(v));
-        do {
-          around.push_back(h);
-          if (!mesh_.is_border(h)) tips += needle_at(v, mesh_.target(h), mesh_.target(mesh_.next(h)));
-          h = mesh_.opposite(mesh_.prev(h));
-        } while (h != around.front());
-      }
-      if (tips < 3) continue;
+      const std::vector<halfedge_descriptor> around = outgoing(v);
       const std::size_t m = around.size();
+      std::vector<char> needle(m);  // face i has a needle corner at v
+      for (std::size_t i = 0; i < m; ++i)
+        needle[i] = !mesh_.is_border(around[i]) &&
+                    needle_at(v, mesh_.target(around[i]), mesh_.target(mesh_.next(around[i])));
+      if (std::count(needle.begin(), needle.end(), 1) < 3) continue;
       auto joined = [&](std::size_t i) {  // face i continues the plane of face i - 1
         const halfedge_descriptor p = around[(i + m - 1) % m], h = around[i];
         return !mesh_.is_border(p) && !mesh_.is_border(h) && coplanar_faces(mesh_.face(p), mesh_.face(h));
@@ -900,10 +904,11 @@ class Pipeline {
       if (start == m) continue;  // one plane all around v: remesh_apex_fans()' case
       for (std::size_t k = 0; k < m;) {
         std::vector<halfedge_descriptor> run{around[(start + k) % m]};
-        for (++k; k < m && joined((start + k) % m); ++k) run.push_back(around[(start + k) % m]);
-        std::size_t needles = 0;
-        for (halfedge_descriptor h : run)
-          if (!mesh_.is_border(h)) needles += needle_at(v, mesh_.target(h), mesh_.target(mesh_.next(h)));
+        std::size_t needles = needle[(start + k) % m];
+        for (++k; k < m && joined((start + k) % m); ++k) {
+          run.push_back(around[(start + k) % m]);
+          needles += needle[(start + k) % m];
+        }
         if (needles >= 3 && !mesh_.is_border(run.front()) && regrade_planar_fan(v, run)) {
           ++replaced;
           break;  // v's star changed
@@ -966,8 +971,7 @@ class Pipeline {
     const Point3d normal = cross(sub(p[1], p[0]), sub(p[2], p[0]));
     for (std::size_t i = 0; i < n; ++i)
       if (!(dot(cross(sub(p[(i + 1) % n], p[i]), sub(p[(i + 2) % n], p[(i + 1) % n])), normal) > 0)) return false;
-    if (!regrade(star, centroid, std::nullopt)) return false;
-    return true;
+    return regrade(star, centroid, std::nullopt);
   }
 
   /// Input faces (by id) that intersect another: slices leave them whole

@@ -23,12 +23,11 @@ Vec unit(const Vec& a) {
   const double l = norm(a);
   return l > 0 ? mul(a, 1.0 / l) : a;
 }
-double angle(const Vec& a, const Vec& b) { return std::atan2(norm(cross(a, b)), dot(a, b)); }
 
 /// The unit vector a fraction t of the way from unit a to unit b along the
 /// great circle (a straight blend where they are too close or opposite).
 Vec slerp(const Vec& a, const Vec& b, double t) {
-  const double th = angle(a, b), s = std::sin(th);
+  const double th = angle_between(a, b), s = std::sin(th);
   if (s < 1e-12) return unit(add(mul(a, 1 - t), mul(b, t)));
   return add(mul(a, std::sin((1 - t) * th) / s), mul(b, std::sin(t * th) / s));
 }
@@ -71,7 +70,7 @@ class RawOffset {
       k = m;
     }
     sharp_.resize(3 * F);
-    for (std::size_t h = 0; h < 3 * F; ++h) sharp_[h] = angle(normal_[h / 3], normal_[twin_[h] / 3]) > step_;
+    for (std::size_t h = 0; h < 3 * F; ++h) sharp_[h] = angle_between(normal_[h / 3], normal_[twin_[h] / 3]) > step_;
     for (std::size_t h = 0; h < 3 * F; ++h)
       if (sharp_[h] && h < twin_[h]) ++r_.sharp_edges;
   }
@@ -159,7 +158,7 @@ class RawOffset {
       const std::uint32_t c = fan[(start + n) % k];
       const FaceView fv = in_.face(c / 3);
       const Vec e1 = sub(in_.points[fv[(c % 3 + 1) % 3]], p), e2 = sub(in_.points[fv[(c % 3 + 2) % 3]], p);
-      acc = add(acc, mul(normal_[c / 3], angle(e1, e2)));
+      acc = add(acc, mul(normal_[c / 3], angle_between(e1, e2)));
       sector_[c] = s;
       const bool last = n + 1 == k;
       if ((sharp_count >= 2 && sharp_[c]) || last) {
@@ -200,7 +199,7 @@ class RawOffset {
     if (d_ < 0)
       for (Vec& u : dirs) u = mul(u, -1.0);
     double widest = 0;
-    for (const Vec& u : dirs) widest = std::max(widest, angle(centre, u));
+    for (const Vec& u : dirs) widest = std::max(widest, angle_between(centre, u));
     const std::size_t rings = std::max<std::size_t>(1, std::size_t(std::ceil(widest / step_)));
     std::vector<Index> inner{add_point(add(p, mul(centre, d_)))};  // ring 0: the apex
     for (std::size_t ring = 1; ring <= rings; ++ring) {
@@ -239,7 +238,7 @@ class RawOffset {
     auto it = arcs_.find(key);
     if (it == arcs_.end()) {
       const Vec &n0 = normals_[v][lo], &n1 = normals_[v][hi];
-      const std::size_t m = std::max<std::size_t>(1, std::size_t(std::ceil(angle(n0, n1) / step_)));
+      const std::size_t m = std::max<std::size_t>(1, std::size_t(std::ceil(angle_between(n0, n1) / step_)));
       std::vector<Index> pts{points_[v][lo]};
       for (std::size_t q = 1; q < m; ++q)
         pts.push_back(add_point(add(in_.points[v], mul(slerp(n0, n1, double(q) / m), d_))));

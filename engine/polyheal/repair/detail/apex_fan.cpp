@@ -91,7 +91,7 @@ std::optional<ApexFanPlan> plan_apex_fan(const Point3d& a, const std::vector<Poi
       const Point3d c = add(a, mul(axis, d));
       for (std::size_t k = 0; k < p.size(); ++k) {
         const Point3d x = sub(p[k], c), y = sub(p[(k + 1) % p.size()], c);
-        if (std::atan2(norm(cross(x, y)), dot(x, y)) < enough) return false;
+        if (angle_between(x, y) < enough) return false;
       }
       return true;
     };

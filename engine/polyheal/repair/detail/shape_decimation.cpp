@@ -651,7 +651,6 @@ struct ShapeDecimator::Impl {
     }
     index.update(faces);
     attach(displaced, faces);
-    ++stats.stars;
     made.push_back(id[0]);
     made.insert(made.end(), id.begin() + 1 + n, id.end());
     return faces;

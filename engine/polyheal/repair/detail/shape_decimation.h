@@ -71,7 +71,6 @@ struct DecimationStats {
   std::size_t collapses = 0;
   std::size_t flips = 0;
   std::size_t removals = 0;  // vertices removed with their hole triangulated anew (set_retriangulate())
-  std::size_t stars = 0;     // stars replaced (replace_star())
 };
 
 /// A new triangulation of a disc of faces: the star of an interior vertex
