@@ -18,13 +18,11 @@ namespace {
 /// The unit cube as 12 triangles, outward, every face with its own three
 /// vertices (an STL-like soup: welding is needed before anything else).
 Soup stl_cube(double shift = 0) {
-  const Point3d c[8] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
-  const int t[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
-                        {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+  const Soup cube = test::box({shift, shift, shift}, {1 + shift, 1 + shift, 1 + shift});
   Soup s;
-  for (const auto& f : t) {
+  for (std::size_t f = 0; f < cube.face_count(); ++f) {
     const Index base = Index(s.points.size());
-    for (int k = 0; k < 3; ++k) s.points.push_back({c[f[k]][0] + shift, c[f[k]][1] + shift, c[f[k]][2] + shift});
+    for (int k = 0; k < 3; ++k) s.points.push_back(cube.points[cube.face(f)[k]]);
     s.add_triangle(base, base + 1, base + 2);
   }
   return s;

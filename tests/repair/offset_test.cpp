@@ -13,6 +13,7 @@
 #include "polyheal/mesh/errors.h"
 #include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/offset.h"
+#include "polyheal/repair/regularize.h"
 #include "support/builders.h"
 
 using namespace polyheal;
@@ -21,11 +22,7 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-Soup cube(double a) {
-  return test::soup({{0, 0, 0}, {a, 0, 0}, {a, a, 0}, {0, a, 0}, {0, 0, a}, {a, 0, a}, {a, a, a}, {0, a, a}},
-                    {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
-                     {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}});
-}
+Soup cube(double a) { return test::box({0, 0, 0}, {a, a, a}); }
 
 
 /// A thin-walled tube: the prism between regular n-gons of circumradius
@@ -139,6 +136,32 @@ TEST_CASE("offset: inwards, a thin-walled tube's hole corners round off, and the
     CHECK(inspect(r.raw).self_intersections.size() > 0);
     CHECK(r.soup.face_count() == 0);
   }
+}
+
+TEST_CASE("offset: inwards, a dumbbell's thin bar closes and its two ends are left, two components") {
+  // Two unit cubes 2 apart joined by a bar 0.25 thick: the three boxes'
+  // union (regularize), offset inwards by more than half the bar.
+  const Soup boxes = test::concat(test::concat(test::box({0, 0, 0}, {1, 1, 1}), test::box({3, 0, 0}, {4, 1, 1})),
+                                  test::box({0.5, 0.375, 0.375}, {3.5, 0.625, 0.625}));
+  const Soup dumbbell = regularize(boxes).soup;
+  REQUIRE(inspect(dumbbell).certified_clean());
+  REQUIRE(inspect(dumbbell).components == 1);
+  const double d = 0.15;
+  OffsetOptions o;
+  o.distance = -d;
+  const OffsetResult r = offset(dumbbell, o);
+  const Soup out = written(r, "offset_dumbbell_in.off");
+  const Report rep = inspect(out);
+  CHECK(rep.certified_clean());
+  CHECK(rep.components == 2);
+  // Each end holds its cube shrunk by d; beyond that only a stub where the
+  // bar joined, inside the bar's section and less than d deep (x in [1-d, 1]).
+  const double end = (1 - 2 * d) * (1 - 2 * d) * (1 - 2 * d), stub = 0.25 * 0.25 * d;
+  CHECK(rep.signed_volume >= 2 * end - 1e-12);
+  CHECK(rep.signed_volume <= 2 * (end + stub));
+  const auto [lo, hi] = distance_range(dumbbell, out);
+  CHECK(lo >= d - r.report.tolerance - 1e-12);
+  CHECK(hi <= d + 1e-12);
 }
 
 TEST_CASE("offset: a smooth closed surface offsets by moving its vertices (no strips), certified") {

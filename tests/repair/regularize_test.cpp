@@ -25,16 +25,7 @@ namespace {
 using Box = std::array<Point3d, 2>;  // min, max corners
 
 /// A closed box, outward (or, with `inward`, facing in: a cavity's wall).
-Soup box(const Box& b, bool inward = false) {
-  const auto& [lo, hi] = b;
-  Soup s = test::soup({{lo[0], lo[1], lo[2]}, {hi[0], lo[1], lo[2]}, {hi[0], hi[1], lo[2]}, {lo[0], hi[1], lo[2]},
-                       {lo[0], lo[1], hi[2]}, {hi[0], lo[1], hi[2]}, {hi[0], hi[1], hi[2]}, {lo[0], hi[1], hi[2]}},
-                      {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
-                       {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}});
-  if (inward)
-    for (std::size_t f = 0; f < s.face_count(); ++f) std::swap(s.indices[3 * f + 1], s.indices[3 * f + 2]);
-  return s;
-}
+Soup box(const Box& b, bool inward = false) { return test::box(b[0], b[1], inward); }
 
 double volume(const Box& b) { return (b[1][0] - b[0][0]) * (b[1][1] - b[0][1]) * (b[1][2] - b[0][2]); }
 

@@ -21,6 +21,16 @@ Soup tetrahedron(double dx, double dy, double dz) {
               {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
 }
 
+Soup box(const Point3d& lo, const Point3d& hi, bool inward) {
+  Soup s = soup({{lo[0], lo[1], lo[2]}, {hi[0], lo[1], lo[2]}, {hi[0], hi[1], lo[2]}, {lo[0], hi[1], lo[2]},
+                 {lo[0], lo[1], hi[2]}, {hi[0], lo[1], hi[2]}, {hi[0], hi[1], hi[2]}, {lo[0], hi[1], hi[2]}},
+                {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                 {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}});
+  if (inward)
+    for (std::size_t f = 0; f < s.face_count(); ++f) std::swap(s.indices[3 * f + 1], s.indices[3 * f + 2]);
+  return s;
+}
+
 Soup concat(const Soup& a, const Soup& b) {
   Soup s = a;
   s.append(b);

@@ -16,6 +16,9 @@ namespace polyheal::test {
 Soup soup(std::initializer_list<Point3d> points, std::initializer_list<std::array<Index, 3>> faces);
 /// A closed, outward-oriented tetrahedron with corners (0,0,0), (1,0,0), (0,1,0), (0,0,1), shifted.
 Soup tetrahedron(double dx = 0, double dy = 0, double dz = 0);
+/// A closed axis-aligned box with corners `lo` and `hi`, facing outwards
+/// (or, with `inward`, facing in: a cavity's wall); 12 triangles.
+Soup box(const Point3d& lo, const Point3d& hi, bool inward = false);
 /// Concatenates soups (indices shifted; points not shared).
 Soup concat(const Soup& a, const Soup& b);
 /// A sphere of radius r about the origin: an icosahedron subdivided
