@@ -144,8 +144,9 @@ TEST_CASE("offset: inwards, a dumbbell's thin bar closes and its two ends are le
   const Soup boxes = test::concat(test::concat(test::box({0, 0, 0}, {1, 1, 1}), test::box({3, 0, 0}, {4, 1, 1})),
                                   test::box({0.5, 0.375, 0.375}, {3.5, 0.625, 0.625}));
   const Soup dumbbell = regularize(boxes).soup;
-  REQUIRE(inspect(dumbbell).certified_clean());
-  REQUIRE(inspect(dumbbell).components == 1);
+  const Report joined = inspect(dumbbell);
+  REQUIRE(joined.certified_clean());
+  REQUIRE(joined.components == 1);
   const double d = 0.15;
   OffsetOptions o;
   o.distance = -d;

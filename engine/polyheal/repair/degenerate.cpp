@@ -817,10 +817,7 @@ class Pipeline {
         detail::plan_apex_fan(centre, link, r_.tolerance, o_.needle_angle, o_.cap_angle);
     if (!plan) return false;
     star.centre = keep && !plan->moved ? mesh_.point(*keep) : Point(plan->apex[0], plan->apex[1], plan->apex[2]);
-    for (const detail::ApexFanPlan::SpokePoint& p : plan->points) {
-      const Point3d q = add(centre, mul(sub(link[p.spoke], centre), p.t));
-      star.points.emplace_back(q[0], q[1], q[2]);
-    }
+    for (const Point3d& p : plan->points) star.points.emplace_back(p[0], p[1], p[2]);
     star.triangles = plan->triangles;
     star.sectors = plan->sectors;
     std::vector<vertex_descriptor> made;

@@ -138,7 +138,8 @@ std::optional<ApexFanPlan> plan_apex_fan(const Point3d& a, const std::vector<Poi
     if (!(next.r > 0) || !(next.r < ring.r)) return std::nullopt;
     for (std::size_t s : next.spokes) {
       next.ids.push_back(1 + n + plan.points.size());
-      plan.points.push_back({s, next.r / length[s]});
+      const double t = next.r / length[s];
+      plan.points.push_back(add(a, mul(sub(link[s], a), t)));
     }
     rings.push_back(std::move(next));
   }
@@ -148,8 +149,7 @@ std::optional<ApexFanPlan> plan_apex_fan(const Point3d& a, const std::vector<Poi
   auto position = [&](std::size_t id) {
     if (id == 0) return plan.apex;
     if (id <= n) return link[id - 1];
-    const ApexFanPlan::SpokePoint& p = plan.points[id - 1 - n];
-    return add(a, mul(sub(link[p.spoke], a), p.t));
+    return plan.points[id - 1 - n];
   };
   auto worst_angle = [&](std::size_t x, std::size_t y, std::size_t z) {
     const auto [lo, hi] = angle_range(position(x), position(y), position(z));

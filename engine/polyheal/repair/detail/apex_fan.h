@@ -31,14 +31,10 @@
 namespace polyheal::detail {
 
 struct ApexFanPlan {
-  /// A new point on spoke `spoke` (a -> link[spoke]) at fraction t of it.
-  struct SpokePoint {
-    std::size_t spoke;
-    double t;
-  };
-  /// Vertex ids of `triangles`: 0 is the apex, 1 + i is link[i], and
-  /// 1 + n + k is points[k] (n = link.size()).
-  std::vector<SpokePoint> points;
+  /// New points on the spokes, each a + (link[s] - a) t for its spoke s
+  /// and fraction t (in doubles). Vertex ids of `triangles`: 0 is the apex,
+  /// 1 + i is link[i], and 1 + n + k is points[k] (n = link.size()).
+  std::vector<Point3d> points;
   /// Where the apex goes: a itself unless the cone is too narrow (moved).
   Point3d apex{};
   bool moved = false;
