@@ -9,6 +9,8 @@
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <CGAL/intersections.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/parallel_sort.h>
+#include <boost/container/small_vector.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -35,6 +37,9 @@ using K = Kernel;  // Epeck: every construction below is exact
 using EPoint = K::Point_3;
 using EVector = K::Vector_3;
 using IK = InputKernel;  // the input's doubles: exact filtered predicates
+/// Pieces or faces around one edge: two, or a few at an intersection curve
+/// (inline storage: the growth asks this for every edge it crosses).
+using Ids = boost::container::small_vector<Index, 6>;
 
 // §3.5: the constrained Delaunay triangulation of one triangle, in its plane
 // projected along the dominant normal axis (dropping a coordinate is exact).
@@ -127,7 +132,7 @@ class Regularizer {
       }
       for (int e = 0; e < 3; ++e) face_edges_.push_back({edge_key(fv[e], fv[(e + 1) % 3]), Index(f)});
     }
-    std::sort(face_edges_.begin(), face_edges_.end());
+    tbb::parallel_sort(face_edges_.begin(), face_edges_.end());
     for (int k = 0; k < 3; ++k) below_[k] = report.bbox_min[k] - (1.0 + std::abs(report.bbox_min[k]));
   }
 
@@ -378,7 +383,7 @@ class Regularizer {
       for (int e = 0; e < 3; ++e) {
         const Index a = piece.v[e], b = piece.v[(e + 1) % 3];
         next.clear();
-        const std::vector<Index> around = pieces_around(a, b, true);
+        const Ids around = pieces_around(a, b, true);
         if (around.size() == 2) {
           const Index other = around[0] == p ? around[1] : around[0];
           if (traverses(other, b, a) && pieces_[other].weight == piece.weight) next.push_back({other, piece.front});
@@ -416,11 +421,11 @@ class Regularizer {
 
   /// The live pieces with edge ab. With `complete`, an input triangle among
   /// them that intersects others is split first (its pieces take its place).
-  std::vector<Index> pieces_around(Index a, Index b, bool complete) {
+  Ids pieces_around(Index a, Index b, bool complete) {
     const std::uint64_t key = edge_key(a, b);
     for (;;) {
-      std::vector<Index> out;
-      std::vector<Index> candidates = faces_with_edge(key);  // input faces (pieces 0..F-1), alive or not
+      Ids out;
+      Ids candidates = faces_with_edge(key);  // input faces (pieces 0..F-1), alive or not
       if (const auto it = edges_.find(key); it != edges_.end())
         candidates.insert(candidates.end(), it->second.begin(), it->second.end());
       bool again = false;
@@ -446,7 +451,7 @@ class Regularizer {
   /// Coincident pieces of different planes are an error when p is valid
   /// (they would be on the output); around an invalid p the edge is left
   /// to the seeds (out unchanged).
-  void around_windings(Index p, Index a, Index b, const std::vector<Index>& around, bool strict,
+  void around_windings(Index p, Index a, Index b, const Ids& around, bool strict,
                        std::vector<std::pair<Index, int>>& out) {
     const EPoint& A = points_[a];
     const EVector u = points_[b] - A;
@@ -721,8 +726,8 @@ class Regularizer {
   void kill(Index t) { pieces_[t].alive = false; }  // an input face: found by faces_with_edge, skipped
 
   /// The input faces with an edge `key` (sorted list lookup).
-  std::vector<Index> faces_with_edge(std::uint64_t key) const {
-    std::vector<Index> out;
+  Ids faces_with_edge(std::uint64_t key) const {
+    Ids out;
     auto it = std::lower_bound(face_edges_.begin(), face_edges_.end(), std::make_pair(key, Index(0)));
     for (; it != face_edges_.end() && it->first == key; ++it) out.push_back(it->second);
     return out;
