@@ -43,6 +43,7 @@ void add_perturb(CLI::App& app, int& exit_code) {
   cmd->add_flag("--overwrite", a->overwrite, "replace an existing output file (never the input)");
   cmd->callback([a, &exit_code] {
     refuse_to_clobber(a->input, a->output, false);
+    check_output_path(a->output, a->overwrite, true);
     a->options.kind = parse_perturb_kind(a->kind);
     const Soup in = read_soup(a->input);
     const PerturbResult r = perturb(in, a->options);

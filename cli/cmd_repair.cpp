@@ -157,6 +157,11 @@ void print_text(const RepairArgs& args, const Outcome& o) {
 void run(RepairArgs& args, int& exit_code) {
   TtyProgress progress;
   Outcome o;
+  for (const std::string* extra : {&args.certificate, &args.provenance})
+    if (!extra->empty()) {
+      refuse_to_clobber(args.input, *extra, false);
+      check_output_path(*extra, args.overwrite);
+    }
   const Soup input = read_repair_input(args, progress, o.read_s);
   args.options.observer = &progress;
   args.options.fill_holes = !args.no_fill;
@@ -169,8 +174,6 @@ void run(RepairArgs& args, int& exit_code) {
   parse_length("--t-junction", args.t_junction, args.options.t_junction, args.options.t_junction_ratio);
   args.options.for_tetgen = args.for_tool == "tetgen";
   parse_length("--max-deviation", args.max_deviation, args.max_deviation_abs, args.max_deviation_ratio);
-  if (!args.certificate.empty()) refuse_to_clobber(args.input, args.certificate, false);
-  if (!args.provenance.empty()) refuse_to_clobber(args.input, args.provenance, false);
 
   const auto t0 = std::chrono::steady_clock::now();
   RepairResult result = run_repair(args, [&] { return repair(input, args.options); });

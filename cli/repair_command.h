@@ -58,6 +58,7 @@ inline void parse_length(const std::string& option, const std::string& text, dou
 inline Soup read_repair_input(const RepairFiles& f, TtyProgress& progress, double& seconds) {
   const auto t0 = std::chrono::steady_clock::now();
   refuse_to_clobber(f.input, f.output, false);
+  check_output_path(f.output, f.overwrite, true);
   progress.stage("reading");
   Soup soup = read_soup(f.input);
   seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -40,6 +40,18 @@ grep_out "CERTIFIED" "$tmp/out" "degenerate verdict printed"
 expect 0 "degenerate output checks clean" -- "$bin" check "$tmp/tj_out.off"
 expect 2 "degenerate refuses to overwrite an existing output" -- "$bin" degenerate "$tmp/tjunction.off" -o "$tmp/tj_out.off"
 expect 2 "degenerate never writes over its input" -- "$bin" degenerate "$tmp/tjunction.off" -o "$tmp/tjunction.off" --overwrite
+# The output is checked before any work: an existing output (or an unknown
+# extension, or a certificate file that exists) is named even when the input
+# would fail to parse, which is read first otherwise.
+for cmd in degenerate regularize rebuild repair; do
+  expect 2 "$cmd refuses an existing output before reading" -- "$bin" $cmd "$tmp/bad.off" -o "$tmp/tj_out.off"
+  grep_out "tj_out.off: exists; refusing to overwrite" "$tmp/err" "$cmd names the existing output, not the input"
+done
+expect 2 "unknown output extension refused before reading" -- "$bin" regularize "$tmp/bad.off" -o "$tmp/new.xyz"
+grep_out "new.xyz" "$tmp/err" "the output with an unknown extension is named"
+expect 2 "repair refuses an existing certificate before reading" -- \
+  "$bin" repair "$tmp/bad.off" -o "$tmp/new.off" --certificate "$tmp/tj_out.off"
+grep_out "tj_out.off: exists" "$tmp/err" "repair names the existing certificate file"
 cmp -s "$tmp/tjunction.off" <(printf 'OFF\n5 6 0\n0 0 0\n2 0 0\n0 2 0\n0 0 2\n1 0 0\n3 2 1 4\n3 2 4 0\n3 0 1 3\n3 0 3 2\n3 1 2 3\n3 1 0 4\n') \
   && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: input was modified"; }
 expect 0 "degenerate --json" -- "$bin" degenerate --json "$tmp/tjunction.off" -o "$tmp/tj_out2.stl" --tolerance 0.5%

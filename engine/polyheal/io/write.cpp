@@ -212,12 +212,23 @@ void refuse_to_clobber(const std::string& input, const std::string& output, bool
     throw OutputError(output + ": is the input file; refusing to overwrite it (pass --overwrite to allow)");
 }
 
+void check_output_path(const std::string& path, bool allow_overwrite, bool mesh) {
+  if (mesh) {
+    try {
+      format_from_path(path);
+    } catch (const InputError& e) {
+      throw OutputError(e.what());
+    }
+  }
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw OutputError(path + ": is a directory");
+  if (!allow_overwrite && std::filesystem::exists(path, ec))
+    throw OutputError(path + ": exists; refusing to overwrite it (pass --overwrite to allow)");
+}
+
 void write_file_atomically(const std::string& path, const std::string& data, bool allow_overwrite) {
   namespace fs = std::filesystem;
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) throw OutputError(path + ": is a directory");
-  if (!allow_overwrite && fs::exists(path, ec))
-    throw OutputError(path + ": exists; refusing to overwrite it (pass --overwrite to allow)");
+  check_output_path(path, allow_overwrite);
   fs::path target(path);
   fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   std::string tmpl = (dir / ("." + target.filename().string() + ".polyheal-XXXXXX")).string();
@@ -252,16 +263,8 @@ void write_file_atomically(const std::string& path, const std::string& data, boo
 
 WriteInfo write_soup(const Soup& soup, const std::string& path, const WriteOptions& options) {
   WriteInfo info;
-  try {
-    info.format = format_from_path(path);
-  } catch (const InputError& e) {
-    throw OutputError(e.what());
-  }
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) throw OutputError(path + ": is a directory");
-  if (!options.allow_overwrite && fs::exists(path, ec))
-    throw OutputError(path + ": exists; refusing to overwrite it (pass --overwrite to allow)");
+  check_output_path(path, options.allow_overwrite, true);
+  info.format = format_from_path(path);
   const std::string data = serialize_soup(soup, info.format, options.ascii, &info.coordinates_rounded);
   info.bytes = data.size();
   write_file_atomically(path, data, options.allow_overwrite);

@@ -44,6 +44,12 @@ WriteInfo write_soup(const Soup& soup, const std::string& path, const WriteOptio
 /// Throws OutputError as write_soup does.
 void write_file_atomically(const std::string& path, const std::string& data, bool allow_overwrite);
 
+/// Throws OutputError unless `path` can take an output: not a directory, not
+/// an existing file unless `allow_overwrite`, and (with `mesh`) an extension
+/// naming a mesh format. The writers check it; commands check it again before
+/// their work, so that a long repair does not end in a refusal.
+void check_output_path(const std::string& path, bool allow_overwrite, bool mesh = false);
+
 /// Throws OutputError when `output` names the same file as `input`, unless
 /// `allow` is set: a repair must never clobber its input by accident.
 void refuse_to_clobber(const std::string& input, const std::string& output, bool allow);
