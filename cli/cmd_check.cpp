@@ -9,6 +9,7 @@
 #include "polyheal/inspect/report.h"
 #include "polyheal/io/read.h"
 #include "progress.h"
+#include "tetgen_run.h"
 #include "certificate.h"
 #include "polyheal/mesh/errors.h"
 #include <filesystem>
@@ -176,9 +177,8 @@ void print_text(const CheckArgs& args, const Report& r, double total_s) {
 }
 
 /// `check --tetgen`: TetGen's own self-intersection test (`tetgen -d`) on
-/// the mesh as read (written as OFF into a temporary directory: TetGen
-/// writes beside its input and reads no OBJ). Returns {ran, pairs, line}:
-/// pairs -1 when TetGen's output could not be read.
+/// the mesh as read (run_tetgen: a .smesh in a temporary directory).
+/// Returns {ran, pairs, line}: pairs -1 when TetGen's output could not be read.
 struct TetgenVerdict {
   bool ran = false;
   long pairs = -1;
@@ -186,26 +186,13 @@ struct TetgenVerdict {
 };
 TetgenVerdict run_tetgen_d(const Soup& soup) {
   TetgenVerdict v;
-  if (std::system("command -v tetgen >/dev/null 2>&1") != 0) {
-    v.line = "tetgen is not installed";
+  const TetgenRun run = run_tetgen(soup, "-d");
+  v.ran = run.ran;
+  if (!run.ran) {
+    v.line = run.output;
     return v;
   }
-  char dir[] = "/tmp/polyheal-tetgen-XXXXXX";
-  if (!mkdtemp(dir)) {
-    v.line = "cannot make a temporary directory";
-    return v;
-  }
-  const std::string path = std::string(dir) + "/mesh.off";
-  write_soup(soup, path);
-  const std::string cmd = "cd '" + std::string(dir) + "' && timeout 600 tetgen -d mesh.off 2>&1";
-  std::string out;
-  if (FILE* p = popen(cmd.c_str(), "r")) {
-    char buf[4096];
-    while (std::size_t n = std::fread(buf, 1, sizeof buf, p)) out.append(buf, n);
-    pclose(p);
-    v.ran = true;
-  }
-  std::filesystem::remove_all(dir);
+  const std::string& out = run.output;
   if (out.find("No faces are intersecting.") != std::string::npos) {
     v.pairs = 0;
     v.line = "No faces are intersecting.";

@@ -12,6 +12,7 @@
 #include "progress.h"
 #include "repair_command.h"
 #include "report_json.h"
+#include "tetgen_run.h"
 
 namespace polyheal::cli {
 namespace {
@@ -25,10 +26,42 @@ std::string joined(const std::vector<std::string>& parts) {
 
 struct RepairArgs : RepairFiles {
   std::string steps = "all", weld, t_junction, max_deviation = "1%", certificate, provenance, for_tool, smesh;
-  bool no_fill = false, drop_enclosed = false;
+  bool no_fill = false, drop_enclosed = false, no_tetgen_run = false;
   RepairOptions options;
   double max_deviation_abs = 0, max_deviation_ratio = 0;
 };
+
+/// TetGen itself on the surfaces `--for tetgen` calls ready (kTetgenSwitches):
+/// the pipeline's candidates and the written file; the last surface's
+/// verdict is remembered, so the written file is not meshed twice.
+constexpr const char* kTetgenSwitches = "-pQ";
+struct TetgenChecks {
+  std::string not_run;   // why TetGen was not run ("" when it was)
+  std::size_t runs = 0;  // surfaces meshed or refused
+  double seconds = 0;
+  int final_status = -1;  // on the written surface: 0 meshed, else TetGen's exit status; -1 not run
+  Soup last;
+  bool last_accepted = false;
+
+  bool accepts(const Soup& s) {
+    if (runs && s.points == last.points && s.indices == last.indices && s.offsets == last.offsets) return last_accepted;
+    const TetgenRun run = run_tetgen(s, kTetgenSwitches);
+    ++runs;
+    seconds += run.seconds;
+    last = s;
+    last_accepted = run.ran && run.status == 0;
+    final_status = run.ran ? run.status : -1;
+    return last_accepted;
+  }
+};
+
+nlohmann::json tetgen_json(const TetgenChecks& t) {
+  return {{"switches", kTetgenSwitches},
+          {"not_run", t.not_run.empty() ? nlohmann::json(nullptr) : nlohmann::json(t.not_run)},
+          {"runs", t.runs},
+          {"seconds", t.seconds},
+          {"written_file_status", t.final_status < 0 ? nlohmann::json(nullptr) : nlohmann::json(t.final_status)}};
+}
 
 struct Outcome {
   RepairReport report;
@@ -37,6 +70,7 @@ struct Outcome {
   int exit_code = kDefects;
   std::vector<std::string> problems;  // why exit 1, one phrase each
   double read_s = 0, repair_s = 0, write_s = 0;
+  TetgenChecks tetgen;
 };
 
 std::vector<std::string> step_names(unsigned mask) {
@@ -107,6 +141,7 @@ nlohmann::json to_json(const RepairArgs& args, const Outcome& o) {
             {"area_fraction_of_input", a.area_in > 0 ? a.area_kept / a.area_in : 0.0},
             {"area_ratio", a.area_in > 0 ? a.area_out / a.area_in : 0.0}}},
           {"tetgen_smesh", args.smesh.empty() ? nlohmann::json(nullptr) : nlohmann::json(args.smesh)},
+          {"tetgen_run", args.options.for_tetgen ? tetgen_json(o.tetgen) : nlohmann::json(nullptr)},
           {"seconds", {{"read", o.read_s}, {"repair", o.repair_s}, {"write_and_verify", o.write_s}}},
           {"peak_memory_mb", peak_memory_mb()}};
 }
@@ -151,6 +186,18 @@ void print_text(const RepairArgs& args, const Outcome& o) {
   for (const std::string& p : o.problems)
     if (a.certified) verdict += "; " + p;
   if (!args.smesh.empty()) std::printf("  TetGen input: %s\n", args.smesh.c_str());
+  if (args.options.for_tetgen) {
+    const TetgenChecks& t = o.tetgen;
+    if (!t.not_run.empty())
+      std::printf("  TetGen itself: not run (%s)\n", t.not_run.c_str());
+    else if (t.final_status < 0)
+      std::printf("  TetGen itself: tetgen %s on %zu candidate surfaces (%.2f s); not on the written file (not ready)\n",
+                  kTetgenSwitches, t.runs, t.seconds);
+    else
+      std::printf("  TetGen itself: tetgen %s %s the written file (%zu surfaces tried, %.2f s)\n", kTetgenSwitches,
+                  t.final_status == 0 ? "meshed" : ("refused (exit " + std::to_string(t.final_status) + ")").c_str(),
+                  t.runs, t.seconds);
+  }
   std::printf("  => %s (%.2f s)\n", verdict.c_str(), o.read_s + o.repair_s + o.write_s);
 }
 
@@ -173,6 +220,10 @@ void run(RepairArgs& args, int& exit_code) {
   parse_length("--weld", args.weld, args.options.weld, args.options.weld_ratio);
   parse_length("--t-junction", args.t_junction, args.options.t_junction, args.options.t_junction_ratio);
   args.options.for_tetgen = args.for_tool == "tetgen";
+  if (args.options.for_tetgen) {
+    o.tetgen.not_run = args.no_tetgen_run ? "--no-tetgen-run" : !tetgen_installed() ? "tetgen is not installed" : "";
+    if (o.tetgen.not_run.empty()) args.options.tetgen_accepts = [&o](const Soup& s) { return o.tetgen.accepts(s); };
+  }
   parse_length("--max-deviation", args.max_deviation, args.max_deviation_abs, args.max_deviation_ratio);
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -186,6 +237,13 @@ void run(RepairArgs& args, int& exit_code) {
       [&](const Soup& written) {
         progress.stage("assessing the written file");
         o.a = assess(input, result.input, written, o.max_deviation, args.options.for_tetgen, result.hole_fills);
+        if (o.a.certified && args.options.tetgen_accepts) {
+          progress.stage("TetGen on the written file");
+          o.a.out.tetgen_refused = !o.tetgen.accepts(written);
+          o.a.certified = !o.a.out.tetgen_refused;
+        } else {
+          o.tetgen.final_status = -1;  // not run on the written file
+        }
         if (!o.a.certified)
           o.problems.push_back(args.options.for_tetgen && o.a.out.certified_clean()
                                    ? "clean but not TetGen-ready: " + joined(defects(o.a.out, true))
@@ -268,8 +326,11 @@ void add_repair(CLI::App& app, int& exit_code) {
   cmd->add_option("--for", args->for_tool,
                   "tetgen: also require TetGen's tolerances (no fold below 0.1 deg, no nearly collinear face, no "
                   "vertex nearly on an edge it is not on), "
-                  "and write OUT.smesh for tetgen -p")
+                  "and write OUT.smesh for tetgen -p; when tetgen is installed, every surface that passes is "
+                  "also given to tetgen -pQ, and one it refuses counts as a defect")
       ->check(CLI::IsMember({"tetgen"}));
+  cmd->add_flag("--no-tetgen-run", args->no_tetgen_run,
+                "with --for tetgen: do not run TetGen itself (trust polyheal's TetGen-readiness test alone)");
   cmd->add_option("--certificate", args->certificate,
                   "write a JSON certificate: input and output SHA-256, each check and its result, parameters");
   cmd->add_option("--provenance", args->provenance,

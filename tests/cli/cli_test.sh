@@ -246,9 +246,17 @@ expect 2 "perturb never writes over its input" -- "$bin" perturb "$tmp/pt1.off" 
 # repair --for tetgen
 expect 0 "repair --for tetgen removes what trips TetGen" -- "$bin" repair "$tmp/pt1.off" -o "$tmp/pt1_tg.off" --for tetgen
 grep_out "TetGen-ready" "$tmp/out" "repair --for tetgen verdict"
+grep_out "TetGen itself: tetgen -pQ meshed the written file" "$tmp/out" "TetGen itself was run on the written file"
 expect 0 "its output is TetGen-ready" -- "$bin" check --tetgen-ready "$tmp/pt1_tg.off"
 [ -s "$tmp/pt1_tg.smesh" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: no .smesh written"; }
 expect 1 "without --for tetgen the same input stays as it is (caps are not defects)" -- "$bin" check --tetgen-ready "$tmp/pt1.off"
+ls "$tmp"/pt1_tg.1.* >/dev/null 2>&1 && { fails=$((fails+1)); echo "FAIL: TetGen's files left beside the output"; } || passes=$((passes+1))
+expect 0 "repair --for tetgen --json reports the TetGen run" -- \
+  "$bin" repair "$tmp/pt1.off" -o "$tmp/pt1_tgj.off" --for tetgen --json
+grep_out '"written_file_status": 0' "$tmp/out" "json: TetGen's exit status on the written file"
+expect 0 "repair --for tetgen --no-tetgen-run" -- \
+  "$bin" repair "$tmp/pt1.off" -o "$tmp/pt1_tgn.off" --for tetgen --no-tetgen-run
+grep_out "TetGen itself: not run (--no-tetgen-run)" "$tmp/out" "--no-tetgen-run says TetGen was not run"
 expect 2 "repair --for rejects an unknown tool" -- "$bin" repair "$tmp/pt1.off" -o "$tmp/pt1_x.off" --for gmsh
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -202,3 +202,38 @@ TEST_CASE("assess: provenance matches polygons corner for corner, in either orie
   for (std::size_t f = 0; f < 5; ++f) CHECK(a.provenance[f] == std::int64_t(f));
   CHECK(a.provenance[5] == -1);
 }
+
+TEST_CASE("repair --for tetgen: a surface TetGen itself refuses is a defect, not a result", "[pipeline][tetgen]") {
+  // Our TetGen-readiness test cannot foresee every failure of TetGen's
+  // floating-point boundary recovery (an opened grazing union aborts in
+  // formcavity with nothing our tolerances flag), so the caller's run of
+  // TetGen has the last word. Here a stand-in for it refuses the input, a
+  // surface our checks call ready: the pipeline must go on to another one.
+  const Soup in = read_soup(test::fixture("torus.off"));
+  InspectOptions io;
+  io.tetgen_segments = true;
+  REQUIRE(inspect(in, io).tetgen_ready());
+  auto same = [](const Soup& a, const Soup& b) { return a.points == b.points && a.indices == b.indices; };
+  std::size_t asked = 0;
+  RepairOptions o;
+  o.for_tetgen = true;
+  o.tetgen_accepts = [&](const Soup& s) {
+    ++asked;
+    return !same(s, in);
+  };
+  const RepairResult r = repair(in, o);
+  CHECK_FALSE(r.report.clean_in);
+  CHECK(r.report.defects_in == 1);  // "refused by TetGen itself"
+  CHECK_FALSE(same(r.soup, in));
+  const Report out = inspect(r.soup, io);
+  CHECK(out.tetgen_ready());
+  CHECK(asked >= 2);  // the input, then the surface returned
+  const Assessment a = written(in, r, "pipe_torus_refused.off", 0.05 * r.report.diagonal);
+  CHECK(a.certified);
+
+  // A TetGen that refuses everything: no stage may call its result ready.
+  o.tetgen_accepts = [](const Soup&) { return false; };
+  const RepairResult none = repair(in, o);
+  CHECK_FALSE(none.report.stages.empty());
+  for (const StageReport& s : none.report.stages) CHECK(s.defects_after >= 1);
+}

@@ -72,6 +72,9 @@ struct Report {
   /// TetGen merges them ("very short edge"), its faces then repeat a corner
   /// and it stops. Searched for with vertices_near_edges.
   std::vector<std::array<Index, 2>> close_vertices;
+  /// Set by a caller that ran TetGen itself on this surface and saw it fail
+  /// (repair --for tetgen); inspect() never sets it.
+  bool tetgen_refused = false;
   // shape
   bool closed = false, manifold = false, oriented = false;
   double signed_volume = 0.0;  // double sum of tetrahedra; meaningful when closed and oriented
@@ -83,10 +86,11 @@ struct Report {
   /// duplicate face, no self-intersection, at least one face.
   bool certified_clean() const;
   /// certified_clean() and nothing TetGen's tolerances would trip over
-  /// (false unless inspected with InspectOptions::tetgen_segments).
+  /// (false unless inspected with InspectOptions::tetgen_segments), and not
+  /// refused by TetGen itself where it was run.
   bool tetgen_ready() const {
     return certified_clean() && sharp_folds.empty() && nearly_degenerate_faces.empty() &&
-           vertices_near_edges_checked && vertices_near_edges.empty() && close_vertices.empty();
+           vertices_near_edges_checked && vertices_near_edges.empty() && close_vertices.empty() && !tetgen_refused;
   }
 };
 

@@ -147,6 +147,11 @@ class Pipeline {
     InspectOptions io;
     io.tetgen_segments = o_.for_tetgen;
     s.report = inspect(soup, io);
+    // What our checks call TetGen-ready, TetGen itself may still refuse (its
+    // boundary recovery rounds Steiner points): where the caller can run it,
+    // its verdict counts as one more defect.
+    if (o_.for_tetgen && o_.tetgen_accepts && s.report.tetgen_ready() && !o_.tetgen_accepts(soup))
+      s.report.tetgen_refused = true;
     s.defects = defect_count(s.report, o_.for_tetgen);
     s.soup = std::move(soup);
     return s;
@@ -518,6 +523,7 @@ std::vector<std::pair<std::string, std::size_t>> defect_kinds(const Report& r, b
     add("nearly degenerate faces", r.nearly_degenerate_faces.size());
     add("vertices nearly on an edge", r.vertices_near_edges.size());
     add("vertices closer than TetGen's shortest edge", r.close_vertices.size());
+    add("refused by TetGen itself", r.tetgen_refused ? 1 : 0);
   }
   if (r.faces == 0) d.emplace_back("no face left", 1);
   return d;

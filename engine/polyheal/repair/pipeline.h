@@ -20,7 +20,9 @@
 // With for_tetgen, a clean surface that TetGen's tolerances would still stop
 // (nearly degenerate faces, sharp folds) goes through the degenerate engine
 // at 179.9/0.1 degrees with folds counted as bad, before the rebuild and
-// again on the rebuild's result. A result with no face left is never kept.
+// again on the rebuild's result; where the caller runs TetGen itself
+// (tetgen_accepts), a surface it refuses counts as a defect. A result with no
+// face left is never kept.
 // The caller writes the result and assesses the written file (assess()):
 // certification, Hausdorff distance, dropped components, provenance.
 #pragma once
@@ -28,6 +30,7 @@
 #include <cstddef>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -61,6 +64,11 @@ struct RepairOptions {
   bool fill_holes = true;
   std::size_t max_hole_edges = 0;   // leave longer boundary loops open (0: fill all)
   bool for_tetgen = false;          // also remove what trips TetGen's tolerances (Report::tetgen_ready)
+  /// With for_tetgen: TetGen itself, run on each surface our checks call
+  /// TetGen-ready (the CLI runs `tetgen -pQ` when installed); false marks
+  /// it refused (Report::tetgen_refused), a defect the later stages work on
+  /// like any other. Empty: TetGen is not run.
+  std::function<bool(const Soup&)> tetgen_accepts;
   Observer* observer = nullptr;
 };
 
