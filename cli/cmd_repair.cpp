@@ -55,6 +55,12 @@ struct TetgenChecks {
   }
 };
 
+nlohmann::json kinds_json(const std::vector<std::pair<std::string, std::size_t>>& kinds) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [what, n] : kinds) j[what] = n;
+  return j;
+}
+
 nlohmann::json tetgen_json(const TetgenChecks& t) {
   return {{"switches", kTetgenSwitches},
           {"not_run", t.not_run.empty() ? nlohmann::json(nullptr) : nlohmann::json(t.not_run)},
@@ -115,7 +121,11 @@ nlohmann::json to_json(const RepairArgs& args, const Outcome& o) {
           {"exit_code", o.exit_code},
           {"problems", o.problems},
           {"parameters", parameters_json(args, o)},
-          {"input_mesh", {{"faces", o.report.faces_in}, {"defects", o.report.defects_in}, {"certified_clean", o.report.clean_in}}},
+          {"input_mesh",
+           {{"faces", o.report.faces_in},
+            {"defects", o.report.defects_in},
+            {"defect_kinds", kinds_json(o.report.defect_kinds_in)},
+            {"certified_clean", o.report.clean_in}}},
           {"stages", stages},
           {"output_mesh", checks_json(a.out)},
           {"defects_after", defect_count(a.out, args.options.for_tetgen)},
@@ -150,7 +160,10 @@ void print_text(const RepairArgs& args, const Outcome& o) {
   const Assessment& a = o.a;
   const double diag = a.diagonal > 0 ? a.diagonal : 1.0;
   std::printf("%s -> %s\n", args.input.c_str(), args.output.c_str());
-  std::printf("  input: %zu faces, %zu defects%s\n", o.report.faces_in, o.report.defects_in,
+  std::string kinds;
+  for (const auto& [what, n] : o.report.defect_kinds_in) kinds += (kinds.empty() ? " (" : ", ") + std::to_string(n) + " " + what;
+  if (!kinds.empty()) kinds += ")";
+  std::printf("  input: %zu faces, %zu defects%s%s\n", o.report.faces_in, o.report.defects_in, kinds.c_str(),
               o.report.clean_in ? " (certified clean: written unchanged)" : "");
   for (const StageReport& s : o.report.stages) {
     std::printf("  %-11s %-8s %6.2f s  %zu faces, %zu defects", s.name.c_str(), s.accepted ? "kept" : "not kept",

@@ -254,6 +254,9 @@ ls "$tmp"/pt1_tg.1.* >/dev/null 2>&1 && { fails=$((fails+1)); echo "FAIL: TetGen
 expect 0 "repair --for tetgen --json reports the TetGen run" -- \
   "$bin" repair "$tmp/pt1.off" -o "$tmp/pt1_tgj.off" --for tetgen --json
 grep_out '"written_file_status": 0' "$tmp/out" "json: TetGen's exit status on the written file"
+expect 1 "repair names the input's defects by kind" -- "$bin" repair "$src/fixtures/dirty_box.obj" -o "$tmp/db.off" --steps clean
+grep_out "input: 176 faces, 141 defects (72 boundary edges, 3 non-manifold vertices, 66 intersecting pairs)" "$tmp/out" \
+  "the input line lists the defects by kind"
 expect 0 "repair --for tetgen --no-tetgen-run" -- \
   "$bin" repair "$tmp/pt1.off" -o "$tmp/pt1_tgn.off" --for tetgen --no-tetgen-run
 grep_out "TetGen itself: not run (--no-tetgen-run)" "$tmp/out" "--no-tetgen-run says TetGen was not run"

@@ -90,6 +90,7 @@ class Pipeline {
     cur_ = inspected(input_);
     r.faces_in = input_.face_count();
     r.defects_in = cur_.defects;
+    r.defect_kinds_in = defect_kinds(cur_.report, o_.for_tetgen);
     r.diagonal = bbox_diagonal(cur_.report);
     result_.input = cur_.report;
     if (done()) {

@@ -86,6 +86,7 @@ struct StageReport {
 
 struct RepairReport {
   std::size_t faces_in = 0, defects_in = 0;
+  std::vector<std::pair<std::string, std::size_t>> defect_kinds_in;  // defect_kinds() of the input
   bool clean_in = false;           // the input was certified already: written unchanged
   double diagonal = 0;
   std::vector<StageReport> stages;
