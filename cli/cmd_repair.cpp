@@ -289,8 +289,13 @@ void run(RepairArgs& args, int& exit_code) {
                                   {"surface_moved", o.a.deviation},
                                   {"hausdorff_relative", o.a.diagonal > 0 ? o.a.hausdorff / o.a.diagonal : -1},
                                   {"dropped_components", o.a.dropped_components}};
+          if (args.options.for_tetgen) extra["tetgen_run"] = tetgen_json(o.tetgen);
+          // The checks are what `check --certificate` can redo on the file;
+          // TetGen's own verdict is recorded beside them, in tetgen_run.
+          Report checked = o.a.out;
+          checked.tetgen_refused = false;
           write_certificate(args.certificate,
-                            make_certificate("repair", args.input, args.output, o.a.out, parameters_json(args, o), extra),
+                            make_certificate("repair", args.input, args.output, checked, parameters_json(args, o), extra),
                             args.overwrite);
         }
         return o.exit_code == kClean;

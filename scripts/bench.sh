@@ -347,7 +347,7 @@ if want repair; then
       continue
     fi
     [ "$code" -eq 0 ] && rp_exit0=$((rp_exit0 + 1))
-    faces=$(sed -n '/"input_mesh"/,/}/p' "$work/rp.json" | json_num faces /dev/stdin)
+    faces=$(sed -n '/"input_mesh"/,/"faces"/p' "$work/rp.json" | json_num faces /dev/stdin)
     out_faces=$(sed -n '/"output_mesh"/,/}/p' "$work/rp.json" | json_num faces /dev/stdin)
     v=$(verdict "$work/rp_ours.off")
     [ "$v" = certified ] && rp_ours=$((rp_ours + 1))

@@ -260,6 +260,16 @@ grep_out "input: 176 faces, 141 defects (72 boundary edges, 3 non-manifold verti
 expect 0 "repair --for tetgen --no-tetgen-run" -- \
   "$bin" repair "$tmp/pt1.off" -o "$tmp/pt1_tgn.off" --for tetgen --no-tetgen-run
 grep_out "TetGen itself: not run (--no-tetgen-run)" "$tmp/out" "--no-tetgen-run says TetGen was not run"
+# A TetGen that refuses everything (a stand-in first on PATH): a surface our
+# test calls ready is then not called TetGen-ready, exit 1, and the
+# certificate still matches the file (TetGen's verdict is kept beside its checks).
+mkdir "$tmp/fakebin"; printf '#!/bin/sh\necho "stand-in TetGen: refusing"\nexit 3\n' > "$tmp/fakebin/tetgen"; chmod +x "$tmp/fakebin/tetgen"
+expect 1 "repair --for tetgen when TetGen refuses every surface" -- \
+  env PATH="$tmp/fakebin:$PATH" "$bin" repair "$tmp/pt1_tg.off" -o "$tmp/pt1_refused.off" --for tetgen --certificate "$tmp/pt1_refused.json"
+grep_out "refused by TetGen itself" "$tmp/out" "the refusal is named as the defect left"
+grep_out "TetGen itself: tetgen -pQ refused (exit 3) the written file" "$tmp/out" "TetGen's verdict on the written file"
+grep_out '"written_file_status": 3' "$tmp/pt1_refused.json" "the certificate records TetGen's verdict"
+expect 0 "that certificate matches its file" -- "$bin" check "$tmp/pt1_refused.off" --certificate "$tmp/pt1_refused.json"
 expect 2 "repair --for rejects an unknown tool" -- "$bin" repair "$tmp/pt1.off" -o "$tmp/pt1_x.off" --for gmsh
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]
