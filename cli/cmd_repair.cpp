@@ -46,11 +46,16 @@ struct TetgenChecks {
   bool accepts(const Soup& s) {
     if (runs && s.points == last.points && s.indices == last.indices && s.offsets == last.offsets) return last_accepted;
     const TetgenRun run = run_tetgen(s, kTetgenSwitches);
+    if (!run.ran) {  // could not start it: not a verdict on the surface
+      not_run = run.output;
+      final_status = -1;
+      return true;
+    }
     ++runs;
     seconds += run.seconds;
     last = s;
-    last_accepted = run.ran && run.status == 0;
-    final_status = run.ran ? run.status : -1;
+    last_accepted = run.status == 0;
+    final_status = run.status;
     return last_accepted;
   }
 };
