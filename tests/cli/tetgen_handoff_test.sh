@@ -26,7 +26,9 @@ for f in "${files[@]}"; do
   cp "$f" "$tmp/in_$stem.$ext"
   if (cd "$tmp" && timeout 300 tetgen -pQ "in_$stem.$ext" >/dev/null 2>&1); then continue; fi
   checked=$((checked + 1))
-  "$bin" repair "$f" -o "$tmp/$stem.off" --for tetgen >"$tmp/$stem.log" 2>&1; code=$?
+  # --no-tetgen-run: polyheal's own TetGen-readiness test must suffice here (with
+  # TetGen run inside the repair, the check below would only repeat it).
+  "$bin" repair "$f" -o "$tmp/$stem.off" --for tetgen --no-tetgen-run >"$tmp/$stem.log" 2>&1; code=$?
   if [ "$code" -gt 1 ]; then fails=$((fails + 1)); echo "FAIL $name: repair exit $code"; tail -3 "$tmp/$stem.log"; continue; fi
   if ! "$bin" check --tetgen-ready "$tmp/$stem.off" >/dev/null 2>&1; then
     fails=$((fails + 1)); echo "FAIL $name: output not TetGen-ready"; continue
