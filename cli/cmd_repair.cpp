@@ -165,9 +165,7 @@ void print_text(const RepairArgs& args, const Outcome& o) {
   const Assessment& a = o.a;
   const double diag = a.diagonal > 0 ? a.diagonal : 1.0;
   std::printf("%s -> %s\n", args.input.c_str(), args.output.c_str());
-  std::string kinds;
-  for (const auto& [what, n] : o.report.defect_kinds_in) kinds += (kinds.empty() ? " (" : ", ") + std::to_string(n) + " " + what;
-  if (!kinds.empty()) kinds += ")";
+  const std::string kinds = o.report.defect_kinds_in.empty() ? "" : " (" + joined(defect_phrases(o.report.defect_kinds_in)) + ")";
   std::printf("  input: %zu faces, %zu defects%s%s\n", o.report.faces_in, o.report.defects_in, kinds.c_str(),
               o.report.clean_in ? " (certified clean: written unchanged)" : "");
   for (const StageReport& s : o.report.stages) {

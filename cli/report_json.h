@@ -18,13 +18,17 @@ inline double peak_memory_mb() {
   return double(u.ru_maxrss) / 1024.0;  // Linux: kilobytes
 }
 
+/// defect_kinds() as phrases: "3 boundary edges", ..., "no face left".
+inline std::vector<std::string> defect_phrases(const std::vector<std::pair<std::string, std::size_t>>& kinds) {
+  std::vector<std::string> d;
+  for (const auto& [what, n] : kinds) d.push_back(what == "no face left" ? what : std::to_string(n) + " " + what);
+  return d;
+}
+
 /// What keeps the written file from being certified (with `for_tetgen`:
 /// TetGen-ready), one phrase each.
 inline std::vector<std::string> defects(const Report& out, bool for_tetgen = false) {
-  std::vector<std::string> d;
-  for (const auto& [what, n] : defect_kinds(out, for_tetgen))
-    d.push_back(what == "no face left" ? what : std::to_string(n) + " " + what);
-  return d;
+  return defect_phrases(defect_kinds(out, for_tetgen));
 }
 
 inline nlohmann::json topology_json(const SurfaceTopology& t) {
