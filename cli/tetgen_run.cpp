@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 
 #include "polyheal/io/write.h"
 
@@ -28,7 +29,13 @@ TetgenRun run_tetgen(const Soup& soup, const std::string& switches, int time_lim
     run.output = "cannot make a temporary directory";
     return run;
   }
-  write_file_atomically(std::string(dir) + "/mesh.smesh", serialize_smesh(soup), false);
+  // A throwaway copy in our own directory: no atomic write (fsync) needed.
+  if (!(std::ofstream(std::string(dir) + "/mesh.smesh", std::ios::binary) << serialize_smesh(soup))) {
+    std::error_code ec;
+    std::filesystem::remove_all(dir, ec);
+    run.output = std::string("cannot write a temporary file in ") + dir;
+    return run;
+  }
   const std::string cmd = "cd '" + std::string(dir) + "' && timeout " + std::to_string(time_limit_s) + " tetgen " +
                           switches + " mesh.smesh 2>&1";
   const auto t0 = std::chrono::steady_clock::now();
