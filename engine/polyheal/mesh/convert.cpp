@@ -206,16 +206,13 @@ Soup mesh_to_soup(const Mesh& mesh) {
   return s;
 }
 
-// CGAL::to_double on a lazy number is only guaranteed to a relative
-// precision of 1e-5; this is the nearest double.
-double nearest_double(const Kernel::FT& x) {
-  // A point interval holds the exact value itself (input coordinates): no
-  // rational needed, which would otherwise be built and converted per call.
-  if (x.approx().is_point()) return x.approx().inf();
-  const auto& e = x.exact();
+namespace {
+
+/// An exact number rounded to the nearest double (ties to even).
+template <class ET>
+double round_exact(const ET& e) {
   const std::pair<double, double> iv = CGAL::to_interval(e);  // tight: equal or adjacent doubles
   if (iv.first == iv.second) return iv.first;
-  using ET = std::decay_t<decltype(e)>;
   const ET mid = (ET(iv.first) + ET(iv.second)) / 2;
   if (e < mid) return iv.first;
   if (mid < e) return iv.second;
@@ -224,7 +221,27 @@ double nearest_double(const Kernel::FT& x) {
   return (bits & 1) == 0 ? iv.first : iv.second;
 }
 
-Point3d nearest_point3d(const Point& p) { return {nearest_double(p.x()), nearest_double(p.y()), nearest_double(p.z())}; }
+}  // namespace
+
+// CGAL::to_double on a lazy number is only guaranteed to a relative
+// precision of 1e-5; this is the nearest double.
+double nearest_double(const Kernel::FT& x) {
+  // A point interval holds the exact value itself (input coordinates): no
+  // rational needed, which would otherwise be built and converted per call.
+  if (x.approx().is_point()) return x.approx().inf();
+  return round_exact(x.exact());
+}
+
+// Read from the point's own approximation, or its exact value: p.x() on a
+// lazy point is a construction of its own (a new lazy node, and an exact
+// evaluation with its once-flag when the interval is not a point) — 15% and
+// 16% of a deintersect run on a 150k-face tube before.
+Point3d nearest_point3d(const Point& p) {
+  const auto& a = p.approx();
+  if (a.x().is_point() && a.y().is_point() && a.z().is_point()) return {a.x().inf(), a.y().inf(), a.z().inf()};
+  const auto& e = p.exact();
+  return {round_exact(e.x()), round_exact(e.y()), round_exact(e.z())};
+}
 
 Point nearest_double_point(const Point& p) {
   const Point3d d = nearest_point3d(p);
