@@ -20,6 +20,7 @@ namespace {
 struct DegenerateArgs : RepairFiles {
   bool no_interleave = false;
   std::string tolerance;  // "0.01" (model units) or "0.1%" (of the bbox diagonal)
+  std::string weld;       // the same
   DegenerateOptions options;
 };
 
@@ -38,10 +39,17 @@ nlohmann::json to_json(const DegenerateArgs& a, const DegenerateReport& r, doubl
        {{"cap_angle", r.cap_angle},
         {"needle_angle", r.needle_angle},
         {"tolerance", r.tolerance},
+        {"weld", r.weld_distance},
         {"bbox_diagonal", r.bbox_diagonal},
         {"slice_grid", r.slice_grid},
         {"global_slices", r.global_slices},
         {"interleave", r.interleave}}},
+      {"weld",
+       {{"near_vertices_welded", r.near_vertices_welded},
+        {"max_move", r.max_weld_move},
+        {"refused", r.weld_refused},
+        {"topology_before", topology_json(r.topology_unwelded)},
+        {"self_intersecting_pairs_after", r.self_intersections_welded}}},
       {"before", counts_json(r.before)},
       {"after", counts_json(r.after)},
       {"faces",
@@ -109,15 +117,25 @@ void print_text(const DegenerateArgs& a, const DegenerateReport& r) {
               r.needle_slices_refused, r.wedge_cuts, r.wedge_tips, r.apex_fan_points, r.apex_fans, r.strip_points, r.strips_staggered, r.collapses,
               r.flips, r.removals,
               r.split_points_rounded);
+  if (r.near_vertices_welded > 0)
+    std::printf("  welded: %zu vertices closer than %.3g to another (moved at most %.3g); the input then: euler %ld, "
+                "components %zu, boundary loops %zu (were %ld, %zu, %zu), %zu intersecting pairs (were %zu)\n",
+                r.near_vertices_welded, r.weld_distance, r.max_weld_move, r.topology_in.euler, r.topology_in.components,
+                r.topology_in.boundary_loops, r.topology_unwelded.euler, r.topology_unwelded.components,
+                r.topology_unwelded.boundary_loops, r.self_intersections_welded, r.self_intersections_in);
+  else if (r.weld_refused)
+    std::printf("  welded: none (welding vertices closer than %.3g would leave a non-manifold surface or more "
+                "intersecting pairs)\n",
+                r.weld_distance);
   std::printf("  after:  %s\n", counts(r.after).c_str());
   std::printf("  topology: euler %ld -> %ld, components %zu -> %zu, boundary loops %zu -> %zu%s\n", r.topology_in.euler,
               r.topology_out.euler, r.topology_in.components, r.topology_out.components, r.topology_in.boundary_loops,
               r.topology_out.boundary_loops, r.topology_in == r.topology_out ? " (unchanged)" : " (CHANGED)");
   std::printf("  self-intersecting pairs: %zu -> %zu\n", r.self_intersections_in, r.self_intersections_out);
-  char moved[96] = "no vertex moved";
-  if (r.apexes_moved > 0)
-    std::snprintf(moved, sizeof moved, "max vertex displacement %.6g (%zu cone tips moved)", r.max_displacement,
-                  r.apexes_moved);
+  char moved[128] = "no vertex moved";
+  if (r.apexes_moved > 0 || r.near_vertices_welded > 0)
+    std::snprintf(moved, sizeof moved, "max vertex displacement %.6g (%zu cone tips moved, %zu vertices welded)",
+                  r.max_displacement, r.apexes_moved, r.near_vertices_welded);
   std::printf("  Hausdorff distance %.6g +- %.2g (%.3g%% of the bbox diagonal; tolerance %.6g); %s\n", r.hausdorff,
               r.hausdorff_error_bound, r.bbox_diagonal > 0 ? 100.0 * r.hausdorff / r.bbox_diagonal : 0.0, r.tolerance,
               moved);
@@ -145,6 +163,9 @@ void add_degenerate(CLI::App& app, int& exit_code) {
       "slicing leaves are removed by edge collapses and flips that keep every vertex\n"
       "at its input position, change no topology, create no cap or self-intersection,\n"
       "and stay within --tolerance of the input surface.\n"
+      "Vertices closer than --weld are welded first (a CAD export's rounding leaves\n"
+      "cracks whose sides intersect), where that keeps the surface manifold and adds\n"
+      "no intersecting pair; the topology kept is then the welded input's.\n"
       "A face that intersects another is never cut: bad faces in and beside the\n"
       "input's intersections are listed (run deintersect or repair first).\n"
       "The written file is read back and checked exactly.\n\n"
@@ -161,6 +182,9 @@ void add_degenerate(CLI::App& app, int& exit_code) {
   cmd->add_option("--tolerance", args->tolerance,
                   "largest allowed distance to the input surface: model units, or a percentage of the bbox "
                   "diagonal (default 0.1%)");
+  cmd->add_option("--weld", args->weld,
+                  "first weld vertices closer than this: model units, or a percentage of the bbox diagonal "
+                  "(default 1e-7%, i.e. 1e-9 of the diagonal; 0: identical points only)");
   cmd->add_option("--slice-grid", args->options.slice_grid,
                   "first cut by three stacks of N evenly spaced axis-aligned planes (more freedom for decimation)")
       ->default_val(0)->check(CLI::Range(0, 1000));
@@ -170,6 +194,7 @@ void add_degenerate(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-interleave", args->no_interleave, "do not decimate along each slice right after it");
   cmd->callback([args, &exit_code] {
     parse_length("--tolerance", args->tolerance, args->options.tolerance, args->options.tolerance_ratio);
+    parse_length("--weld", args->weld, args->options.weld, args->options.weld_ratio, true);
     args->options.interleave = !args->no_interleave;
     TtyProgress progress;
     double read_s = 0;

@@ -37,7 +37,8 @@ inline void add_repair_files(CLI::App* cmd, RepairFiles& f, const std::string& s
 
 /// Parses a length option: "0.01" in model units (into `absolute`) or
 /// "0.1%" of the bbox diagonal (into `ratio`, as a fraction).
-inline void parse_length(const std::string& option, const std::string& text, double& absolute, double& ratio) {
+inline void parse_length(const std::string& option, const std::string& text, double& absolute, double& ratio,
+                         bool allow_zero = false) {
   if (text.empty()) return;
   const bool relative = text.back() == '%';
   std::size_t used = 0;
@@ -47,8 +48,9 @@ inline void parse_length(const std::string& option, const std::string& text, dou
   } catch (const std::exception&) {
     used = 0;
   }
-  if (used != text.size() - (relative ? 1 : 0) || !(v > 0))
-    throw CLI::ValidationError(option, "expected a positive number, optionally followed by %: " + text);
+  if (used != text.size() - (relative ? 1 : 0) || !(v > 0 || (allow_zero && v == 0)))
+    throw CLI::ValidationError(option, std::string(allow_zero ? "expected a number >= 0" : "expected a positive number") +
+                                           ", optionally followed by %: " + text);
   if (relative) ratio = v / 100.0;
   else absolute = v;
 }

@@ -66,8 +66,14 @@ expect 2 "degenerate malformed input" -- "$bin" degenerate "$tmp/bad.off" -o "$t
 # A CAD STL with pinch vertices and intersections: degenerate must end with a
 # verdict (0 or 1), never a crash (a pinch-identity default once aliased new
 # vertices to vertex 0 and crashed the pair test).
-"$bin" degenerate "$src/fixtures/angle_block.stl" -o "$tmp/ab_deg.off" >/dev/null 2>&1; code=$?
-[ "$code" -le 1 ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: degenerate on angle_block.stl: exit $code"; }
+expect 1 "degenerate --weld 0 leaves angle_block's needles at its cracks" -- "$bin" degenerate --weld 0 "$src/fixtures/angle_block.stl" -o "$tmp/ab_deg0.off"
+grep_out "it intersects another face, as in the input" "$tmp/out" "degenerate names the intersections it may not touch"
+# Its intersections are cracks between vertices 6e-17 apart: welded by default, it is certified.
+expect 0 "degenerate welds angle_block's rounding cracks and certifies it" -- "$bin" degenerate --json "$src/fixtures/angle_block.stl" -o "$tmp/ab_deg.off"
+grep_out '"near_vertices_welded": 46' "$tmp/out" "degenerate json counts the welded vertices"
+grep_out '"refused": false' "$tmp/out" "degenerate json: the weld was kept"
+expect 0 "degenerate's welded output checks clean" -- "$bin" check "$tmp/ab_deg.off"
+expect 2 "degenerate bad weld distance" -- "$bin" degenerate "$tmp/tjunction.off" -o "$tmp/x.off" --weld -1
 # polyheal deintersect
 expect 0 "deintersect frees the coarse tube" -- "$bin" deintersect "$src/fixtures/tube_edge3.0.off" -o "$tmp/tube_out.off"
 grep_out "intersecting faces: 220 -> 0" "$tmp/out" "deintersect reports faces before and after"

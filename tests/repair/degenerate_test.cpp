@@ -258,9 +258,13 @@ TEST_CASE("degenerate: collapses never join two pinch copies' edges (the file's 
   // -37 -> -30 and a fifth boundary loop before the check in
   // shape_decimation.
   const Soup raw = read_soup(test::fixture("angle_block.stl"));
+  // (Welded, its cracks and pinch points would close: identical points only.)
   const Soup in = remove_self_intersections(raw).soup;
   const SurfaceTopology before = topology_of(inspect(in));
-  const DegenerateResult result = remove_degenerate_faces(in);
+  DegenerateOptions identical_only;
+  identical_only.weld = 0;
+  const DegenerateResult result = remove_degenerate_faces(in, identical_only);
+  CHECK(result.report.pinched_vertices_split > 0);
   const std::string path = test::scratch("degenerate_angle_block.off");
   write_soup(result.soup, path);
   const Soup out = read_soup(path);
@@ -275,10 +279,16 @@ TEST_CASE("degenerate: where the input self-intersects, nothing is cut and no pa
   // could remove (374 -> 967, faces 1572 -> 4763). Now every face that
   // intersects in the output is an input face, unchanged, and its partner
   // intersected it in the input; every bad face left is listed.
+  // Its pairs are cracks between vertices 5e-16 apart, which the near weld
+  // closes by default (next test); without it they are intersections like
+  // any other.
   const Soup in = read_soup(test::fixture("corpus/trimesh__idler_riser.STL"));
   const Report before = inspect(in);
   REQUIRE_FALSE(before.self_intersections.empty());
-  const DegenerateResult result = remove_degenerate_faces(in);
+  DegenerateOptions identical_only;
+  identical_only.weld = 0;
+  const DegenerateResult result = remove_degenerate_faces(in, identical_only);
+  CHECK(result.report.near_vertices_welded == 0);
   const std::string path = test::scratch("degenerate_idler_riser.off");
   write_soup(result.soup, path);
   const Soup out = read_soup(path);
@@ -307,6 +317,66 @@ TEST_CASE("degenerate: where the input self-intersects, nothing is cut and no pa
   CHECK(bad_out < bad_in / 2);
   CHECK(result.report.leftovers.size() == bad_out);
   CHECK(result.report.hausdorff + result.report.hausdorff_error_bound <= result.report.tolerance);
+}
+
+TEST_CASE("degenerate: a CAD STL's rounding cracks are welded first, and its needles then all go",
+          "[repair][degenerate]") {
+  // trimesh's CAD STLs as exported: vertices a few 1e-16 apart leave cracks
+  // (boundary loops) whose two sides intersect exactly, so nothing could be
+  // cut or collapsed there (idler_riser: 50 needles left, featuretype 863).
+  // Welded within 1e-9 of the diagonal they are closed edges; every bad face
+  // then goes, with the welded input's topology and within the tolerance of
+  // the input as exported.
+  for (const char* name : {"corpus/trimesh__idler_riser.STL", "angle_block.stl"}) {
+    INFO(name);
+    const Soup in = read_soup(test::fixture(name));
+    const Report before = inspect(in);
+    REQUIRE_FALSE(before.self_intersections.empty());
+    REQUIRE(before.boundary_loops > 0);
+    const DegenerateResult result = remove_degenerate_faces(in);
+    const DegenerateReport& r = result.report;
+    CHECK(r.near_vertices_welded > 0);
+    CHECK_FALSE(r.weld_refused);
+    CHECK(r.max_weld_move <= r.weld_distance);
+    CHECK(r.weld_distance == Approx(1e-9 * r.bbox_diagonal));
+    CHECK(r.self_intersections_welded == 0);
+    const std::string path = test::scratch(std::string("degenerate_welded_") + (name[0] == 'c' ? "idler" : "block") + ".off");
+    write_soup(result.soup, path);
+    const Soup out = read_soup(path);
+    DegenerateReport again = r;
+    certify(in, out, again);
+    CHECK(again.certified);
+    const Report after = inspect(out);
+    CHECK(after.degenerate_faces.empty());
+    CHECK(after.caps.empty());
+    CHECK(after.needles.empty());
+    CHECK(after.self_intersections.empty());
+    // closed now: the cracks were the boundary
+    CHECK(after.closed);
+    CHECK(after.boundary_loops == 0);
+    CHECK(topology_of(after) == r.topology_in);
+    CHECK(again.hausdorff + again.hausdorff_error_bound <= r.tolerance);
+    // the exported input's vertices all lie near the output (the weld moved
+    // them by at most max_weld_move)
+    const detail::SurfaceDistance to_output(out);
+    for (const Point3d& p : in.points) CHECK(std::sqrt(to_output.squared_distance(p)) <= r.tolerance);
+  }
+}
+
+TEST_CASE("degenerate: a near weld that would make an edge non-manifold is not made", "[repair][degenerate]") {
+  // Two boxes whose edges run 1e-12 apart: welded, four faces would share
+  // that edge. The weld is refused and the two closed boxes stay as given.
+  const double gap = 1e-12;
+  const Soup in = test::concat(test::box({0, 0, 0}, {1, 1, 1}), test::box({1 + gap, 1 + gap, 0}, {2, 2, 1}));
+  const DegenerateResult result = remove_degenerate_faces(in);
+  const DegenerateReport& r = result.report;
+  CHECK(r.weld_refused);
+  CHECK(r.near_vertices_welded == 0);
+  CHECK(r.max_displacement == 0);
+  CHECK(r.topology_in == r.topology_unwelded);
+  CHECK(r.topology_out == r.topology_in);
+  CHECK(r.certified);
+  CHECK(test::faces_by_position(result.soup) == test::faces_by_position(in));
 }
 
 TEST_CASE("degenerate with a fold angle: a spike folded onto its neighbours is collapsed (repair --for tetgen)",

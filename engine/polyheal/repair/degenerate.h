@@ -2,9 +2,13 @@
 // Procedure to Eliminate Degenerate Faces from Triangle Meshes" (VMV 2001).
 //
 // The pipeline (`polyheal degenerate`), stage by stage:
-//   1. preprocess   weld identical points; remove faces with a repeated
+//   1. preprocess   weld identical points, and points closer than --weld
+//                   (default 1e-9 of the bbox diagonal: a CAD export's
+//                   rounding cracks) where that builds a manifold mesh with
+//                   no more intersecting pairs; remove faces with a repeated
 //                   vertex index topologically; build the exact working mesh
 //                   (Surface_mesh<Epeck>). A non-manifold soup is refused.
+//                   The topology kept is the welded input's.
 //   2. zero-area    exactly collinear faces go by edge flip or collapse
 //                   (detail/shape_decimation.h).
 //   3. slicing      optional supersampling by three stacks of axis-aligned
@@ -41,7 +45,7 @@
 //                   the written soup with the oracle: shapes, topology,
 //                   self-intersections, Hausdorff distance to the input.
 //
-// No input vertex moves: vertices keep their exact input coordinates; slicing
+// No input vertex moves (but by the weld): vertices keep their exact input coordinates; slicing
 // adds points on the input surface (some rounded to doubles at once, an ulp
 // away); collapses keep the surviving vertex in place.
 #pragma once
@@ -61,6 +65,8 @@ struct DegenerateOptions {
   double needle_angle = 5.0;     // degrees: a face with a smaller angle is a needle
   double tolerance = -1.0;       // model units; negative: tolerance_ratio x bbox diagonal
   double tolerance_ratio = 1e-3;
+  double weld = -1;              // model units: weld vertices closer than this first; negative: weld_ratio x diagonal; 0: identical only
+  double weld_ratio = 1e-9;
   int slice_grid = 0;            // N: three stacks of N axis-aligned planes first (§5)
   bool global_slices = false;    // the paper's global slices instead of local ones
   bool interleave = true;        // decimate along each slice right after it
@@ -96,7 +102,14 @@ struct DegenerateReport {
   std::size_t pinched_vertices_split = 0;  // copies made for pinch points (welded again on output)
   ShapeCounts before;
   std::size_t self_intersections_in = 0;
-  SurfaceTopology topology_in;
+  SurfaceTopology topology_unwelded;  // the input's, as read
+  // the near weld (preprocess): vertices closer than weld_distance merged
+  double weld_distance = 0;
+  std::size_t near_vertices_welded = 0;
+  double max_weld_move = 0;            // the farthest a welded vertex moved
+  bool weld_refused = false;           // the welded surface was not manifold, or had more intersecting pairs
+  std::size_t self_intersections_welded = 0;  // pairs of the surface worked on (after the weld)
+  SurfaceTopology topology_in;        // ... and its topology, which the output must keep
   // stages
   std::size_t faces_after_zero_area = 0, faces_after_slicing = 0, faces_out = 0;
   std::size_t peak_faces = 0;  // the largest intermediate mesh
@@ -106,7 +119,7 @@ struct DegenerateReport {
   std::size_t apex_fans = 0, apex_fan_points = 0;  // remesh_apex_fans(): cone tips graded anew, points made
   std::size_t planar_fans = 0;  // remesh_planar_fans(): planar faces fanned from a corner, graded anew
   std::size_t apexes_moved = 0;  // ... tips of cones too narrow for any fan there, moved inward along the axis
-  double max_displacement = 0;   // the farthest any input vertex moved (only such tips move)
+  double max_displacement = 0;   // the farthest any input vertex moved (only such tips, and welded vertices, move)
   std::size_t wedge_tips = 0, wedge_cuts = 0;  // cut_wedge(): tips given a series of cuts, cuts made
   std::size_t strips_staggered = 0, strip_points = 0;  // stagger_strips(): strips given side points, points
   std::size_t strip_zigzags = 0;  // ... strips retriangulated directly as the zigzag between them
@@ -142,8 +155,9 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
 /// Stage 5 on `written` (the output as read back from disk; `input` as given
 /// to remove_degenerate_faces): fills the
 /// output half of `report`. certified = no zero-area face, cap or needle;
-/// topology unchanged; no self-intersection unless the input had as many;
-/// Hausdorff distance within the tolerance.
+/// the topology of the input (after the near weld); no more intersecting
+/// pairs than the input had after the weld; Hausdorff distance to the input
+/// as given (not welded) within the tolerance.
 void certify(const Soup& input, const Soup& written, DegenerateReport& report);
 
 }  // namespace polyheal

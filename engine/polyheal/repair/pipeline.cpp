@@ -263,6 +263,7 @@ class Pipeline {
       d.cap_angle = 180;    // zero-area faces only: caps and needles are shapes, not defects
       d.needle_angle = 0;
       d.certify = false;
+      d.weld = 0;  // the clean stage welds, with the repair's own distances
       d.observer = o_.observer;
       DegenerateResult res = remove_degenerate_faces(cur_.soup, d);
       const DegenerateReport& r = res.report;
@@ -325,6 +326,7 @@ class Pipeline {
       d.needle_angle = 0.1;
       d.fold_angle = InspectOptions{}.tetgen_fold_angle;  // spikes folded onto a neighbour: collapsed
       d.certify = false;
+      d.weld = 0;  // as in degenerate(): TetGen's close vertices go by short_edges()
       d.observer = o_.observer;
       DegenerateResult res = remove_degenerate_faces(from, d);
       const DegenerateReport& r = res.report;
