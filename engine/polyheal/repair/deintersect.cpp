@@ -13,6 +13,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "polyheal/inspect/exact_predicates.h"
 #include "polyheal/inspect/local_index.h"
 #include "polyheal/inspect/self_intersections.h"
 #include "polyheal/mesh/convert.h"
@@ -165,7 +166,9 @@ class Deintersector {
     return CGAL::cross_product(mesh_.point(c[1]) - mesh_.point(c[0]), mesh_.point(c[2]) - mesh_.point(c[0]));
   }
   /// A face's corners as they are now, standing for its normal in the
-  /// exact sign tests below (no lazy vector is built for them).
+  /// exact sign tests below: normals_agree() decides them on intervals
+  /// first (lazy Vector_3 chains built and freed per test were ~15% of a
+  /// deintersect run before).
   struct FaceNormal {
     std::array<Point, 3> p;
   };
@@ -174,35 +177,13 @@ class Deintersector {
     return {{mesh_.point(c[0]), mesh_.point(c[1]), mesh_.point(c[2])}};
   }
   static bool is_null(const FaceNormal& n) { return CGAL::collinear(n.p[0], n.p[1], n.p[2]); }
-  /// The sign of the dot product of the two faces' normals, exactly:
-  /// intervals on the points' approximations first, their exact values
-  /// when the intervals do not decide (lazy Vector_3 chains built and freed
-  /// per test were ~15% of a deintersect run before).
-  template <class P>
-  static auto dot_of_normals(const std::array<const P*, 3>& a, const std::array<const P*, 3>& b) {
-    using FT = std::decay_t<decltype(std::declval<const P&>().x())>;
-    auto cross = [](const std::array<const P*, 3>& t) {
-      const FT ux = t[1]->x() - t[0]->x(), uy = t[1]->y() - t[0]->y(), uz = t[1]->z() - t[0]->z();
-      const FT vx = t[2]->x() - t[0]->x(), vy = t[2]->y() - t[0]->y(), vz = t[2]->z() - t[0]->z();
-      return std::array<FT, 3>{FT(uy * vz - uz * vy), FT(uz * vx - ux * vz), FT(ux * vy - uy * vx)};
-    };
-    const std::array<FT, 3> m = cross(a), n = cross(b);
-    return FT(m[0] * n[0] + m[1] * n[1] + m[2] * n[2]);
+  /// The dot product of the two normals is positive.
+  static bool agree(const FaceNormal& x, const FaceNormal& y) {
+    return normals_agree(x.p[0], x.p[1], x.p[2], y.p[0], y.p[1], y.p[2]);
   }
-  static CGAL::Sign sign_of_dot(const FaceNormal& x, const FaceNormal& y) {
-    {
-      CGAL::Protect_FPU_rounding<true> upward;
-      const auto d = dot_of_normals<std::decay_t<decltype(CGAL::approx(x.p[0]))>>(
-          {&CGAL::approx(x.p[0]), &CGAL::approx(x.p[1]), &CGAL::approx(x.p[2])},
-          {&CGAL::approx(y.p[0]), &CGAL::approx(y.p[1]), &CGAL::approx(y.p[2])});
-      if (d.inf() > 0) return CGAL::POSITIVE;
-      if (d.sup() < 0) return CGAL::NEGATIVE;
-      if (d.inf() == 0 && d.sup() == 0) return CGAL::ZERO;
-    }
-    const auto d = dot_of_normals<std::decay_t<decltype(CGAL::exact(x.p[0]))>>(
-        {&CGAL::exact(x.p[0]), &CGAL::exact(x.p[1]), &CGAL::exact(x.p[2])},
-        {&CGAL::exact(y.p[0]), &CGAL::exact(y.p[1]), &CGAL::exact(y.p[2])});
-    return CGAL::sign(d);
+  /// ... negative: positive with y turned over.
+  static bool opposed(const FaceNormal& x, const FaceNormal& y) {
+    return normals_agree(x.p[0], x.p[1], x.p[2], y.p[0], y.p[2], y.p[1]);
   }
   Point3d p3(vertex_descriptor v) const { return approx_point3d(mesh_.point(v)); }
 
@@ -228,13 +209,13 @@ class Deintersector {
       if (is_null(n)) return false;
       if (swap) {
         for (const FaceNormal& m : before)
-          if (sign_of_dot(n, m) != CGAL::POSITIVE) return false;
-      } else if (!folded[i] && sign_of_dot(n, before[i]) != CGAL::POSITIVE) {
+          if (!agree(n, m)) return false;
+      } else if (!folded[i] && !agree(n, before[i])) {
         return false;
       }
     }
     for (halfedge_descriptor h : unfolded)
-      if (sign_of_dot(normal(mesh_.face(h)), normal(mesh_.face(mesh_.opposite(h)))) != CGAL::POSITIVE) return false;
+      if (!agree(normal(mesh_.face(h)), normal(mesh_.face(mesh_.opposite(h))))) return false;
     return true;
   }
 
@@ -248,7 +229,7 @@ class Deintersector {
       char folded = 0;
       for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_)) {
         const face_descriptor g = mesh_.face(mesh_.opposite(h));
-        if (g != Mesh::null_face() && sign_of_dot(n, normal(g)) == CGAL::NEGATIVE) folded = 1;
+        if (g != Mesh::null_face() && opposed(n, normal(g))) folded = 1;
       }
       out.push_back(folded);
     }
@@ -263,7 +244,7 @@ class Deintersector {
     std::vector<halfedge_descriptor> out;
     for (halfedge_descriptor h : hs) {
       const face_descriptor g = mesh_.face(mesh_.opposite(h));
-      if (g != Mesh::null_face() && sign_of_dot(normal(mesh_.face(h)), normal(g)) == CGAL::POSITIVE) out.push_back(h);
+      if (g != Mesh::null_face() && agree(normal(mesh_.face(h)), normal(g))) out.push_back(h);
     }
     return out;
   }
