@@ -190,9 +190,10 @@ struct ShapeDecimator::Impl {
   bool near_input(const Triple& t, std::size_t& last) const {
     // Every vertex lies on the input surface, so a triangle no longer than
     // the tolerance is within it everywhere; longer ones are sampled.
+    const NearKey corner{approx(t[0]), approx(t[1]), approx(t[2])};
     double longest2 = 0;
     for (int k = 0; k < 3; ++k) {
-      const Point3d d = sub(approx(t[k]), approx(t[(k + 1) % 3]));
+      const Point3d d = sub(corner[k], corner[(k + 1) % 3]);
       longest2 = std::max(longest2, dot(d, d));
     }
     if (longest2 <= tol2) return true;
@@ -200,15 +201,13 @@ struct ShapeDecimator::Impl {
     // samples are computed from them) and the input surface, which stays:
     // on CAD fans the same candidate triangles come up again whenever a
     // neighbour changes (ADIS16480: 157k asked, 70k distinct).
-    const NearKey key{approx(t[0]), approx(t[1]), approx(t[2])};
-    if (const auto it = near_input_cache.find(key); it != near_input_cache.end()) return it->second;
-    const bool ok = sampled_near_input(t, longest2, last);
-    near_input_cache.emplace(key, ok);
+    if (const auto it = near_input_cache.find(corner); it != near_input_cache.end()) return it->second;
+    const bool ok = sampled_near_input(t, corner, longest2, last);
+    near_input_cache.emplace(corner, ok);
     return ok;
   }
-  bool sampled_near_input(const Triple& t, double longest2, std::size_t& last) const {
+  bool sampled_near_input(const Triple& t, const NearKey& corner, double longest2, std::size_t& last) const {
     const int steps = std::min(6, 1 + static_cast<int>(std::sqrt(longest2 / tol2)));
-    const std::array<Point3d, 3> corner{approx(t[0]), approx(t[1]), approx(t[2])};
     // The corners lie on the input: a sample within the tolerance of one
     // needs no search. The others are searched farthest from the corners
     // first: a failing triangle (most are: ADIS16480 59k of 71k candidates)
