@@ -1190,6 +1190,7 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   Mesh mesh;
   MeshBuildResult built;
   for (const double near : {r.weld_distance, 0.0}) {
+    in_mesh = &in;
     clean = preprocess(input, near, r.repeated_index_faces, r.near_vertices_welded, r.max_weld_move);
     if (!clean.is_triangle_soup()) throw UnsupportedInput("not a triangle mesh (polygons with more than 3 corners)");
     if (r.repeated_index_faces || r.near_vertices_welded) {
@@ -1203,7 +1204,6 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
     if (r.near_vertices_welded == 0) break;
     if (built.ok && in_mesh->self_intersections.size() <= in.self_intersections.size()) break;
     r.weld_refused = true;  // try again with identical points only
-    in_mesh = &in;
   }
   r.self_intersections_welded = in_mesh->self_intersections.size();
   r.topology_in = topology_of(*in_mesh);
