@@ -73,6 +73,9 @@ nlohmann::json to_json(const CheckArgs& args, const Report& r, double read_s, do
         {"caps", r.caps.size()},
         {"needles", r.needles.size()},
         {"self_intersecting_pairs", r.self_intersections.size()},
+        {"crack_pairs", r.crack_pairs},
+        {"crack_vertex_pairs", r.crack_vertex_pairs},
+        {"crack_distance", args.inspect.crack_ratio * bbox_diagonal(r)},
         {"cap_angle", args.inspect.cap_angle},
         {"needle_angle", args.inspect.needle_angle}}},
       {"tetgen",
@@ -132,6 +135,10 @@ void print_text(const CheckArgs& args, const Report& r, double total_s) {
   std::printf("  exact: %zu degenerate faces, %zu caps (>%g deg), %zu needles (<%g deg), %zu self-intersecting pairs\n",
               r.degenerate_faces.size(), r.caps.size(), args.inspect.cap_angle, r.needles.size(),
               args.inspect.needle_angle, r.self_intersections.size());
+  if (r.crack_pairs)
+    std::printf("    %zu of the pairs meet at %zu pairs of corners closer than %g (%g of the diagonal) but not welded:\n"
+                "    cracks a CAD export's rounding leaves; `polyheal degenerate` and `polyheal repair` weld them\n",
+                r.crack_pairs, r.crack_vertex_pairs, args.inspect.crack_ratio * bbox_diagonal(r), args.inspect.crack_ratio);
   const bool looked = r.vertices_near_edges_checked;
   const std::string near = looked ? std::to_string(r.vertices_near_edges.size()) : std::string("(not looked for: --tetgen-ready)");
   const std::string close = looked ? std::to_string(r.close_vertices.size()) : std::string("(not looked for)");

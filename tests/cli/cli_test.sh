@@ -68,7 +68,13 @@ expect 2 "degenerate malformed input" -- "$bin" degenerate "$tmp/bad.off" -o "$t
 # vertices to vertex 0 and crashed the pair test).
 expect 1 "degenerate --weld 0 leaves angle_block's needles at its cracks" -- "$bin" degenerate --weld 0 "$src/fixtures/angle_block.stl" -o "$tmp/ab_deg0.off"
 grep_out "it intersects another face, as in the input" "$tmp/out" "degenerate names the intersections it may not touch"
-# Its intersections are cracks between vertices 6e-17 apart: welded by default, it is certified.
+# Its intersections are cracks between vertices 6e-17 apart: check says so, and points to the weld.
+expect 1 "check finds angle_block's intersecting pairs" -- "$bin" check "$src/fixtures/angle_block.stl"
+grep_out "102 of the pairs meet at 22 pairs of corners closer than" "$tmp/out" "check counts the pairs at unwelded cracks"
+grep_out "polyheal degenerate. and .polyheal repair. weld them" "$tmp/out" "check names the commands that weld cracks"
+expect 1 "check --json on angle_block" -- "$bin" check --json "$src/fixtures/angle_block.stl"
+grep_out '"crack_pairs": 102' "$tmp/out" "check json counts the crack pairs"
+# Welded by default, it is certified.
 expect 0 "degenerate welds angle_block's rounding cracks and certifies it" -- "$bin" degenerate --json "$src/fixtures/angle_block.stl" -o "$tmp/ab_deg.off"
 grep_out '"near_vertices_welded": 46' "$tmp/out" "degenerate json counts the welded vertices"
 grep_out '"refused": false' "$tmp/out" "degenerate json: the weld was kept"

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cmath>
 
 #include "polyheal/inspect/report.h"
 #include "polyheal/io/write.h"
@@ -176,6 +177,29 @@ TEST_CASE("inspect: caps, needles and degenerate faces decided exactly", "[inspe
     CHECK(r.caps.size() == row.caps);
     CHECK(r.needles.size() == row.needles);
   }
+}
+
+TEST_CASE("inspect: intersecting pairs at unwelded near-duplicate corners are told apart as cracks", "[inspect]") {
+  // A unit square split along its diagonal, the second triangle's copy of
+  // the corner (1, 1, 0) moved along x: its diagonal edge then passes into
+  // the first triangle, a coplanar overlap either way. One ulp off is a
+  // crack (as a CAD STL export leaves them); a hundredth is not.
+  const double ulp = std::nextafter(1.0, 2.0);
+  for (const auto& [x, crack] : {std::pair{ulp, true}, {1.01, false}}) {
+    INFO("copy at x = " << x);
+    const Soup s = test::soup({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {x, 1, 0}, {0, 1, 0}}, {{0, 1, 2}, {0, 3, 4}});
+    const Report r = inspect(s);
+    REQUIRE(r.self_intersections.size() == 1);
+    CHECK(r.crack_pairs == (crack ? 1u : 0u));
+    CHECK(r.crack_vertex_pairs == (crack ? 1u : 0u));
+    InspectOptions off;
+    off.crack_ratio = 0;
+    CHECK(inspect(s, off).crack_pairs == 0);
+  }
+  // The clean square has no pair, so no crack either.
+  const Report clean = inspect(test::soup({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, {{0, 1, 2}, {0, 2, 3}}));
+  CHECK(clean.self_intersections.empty());
+  CHECK(clean.crack_pairs == 0);
 }
 
 TEST_CASE("inspect: TetGen's tolerances are reported apart from exact defects", "[inspect]") {

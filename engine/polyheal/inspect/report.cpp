@@ -3,9 +3,11 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_invoke.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <set>
 
 #include "polyheal/inspect/detail/parallel.h"
 #include "polyheal/inspect/predicates.h"
@@ -26,6 +28,7 @@ EdgeRef ref(const Edge& e) {
 }
 
 void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions& o, Report& r);
+void count_cracks(const Soup& soup, const InspectOptions& o, Report& r);
 
 }  // namespace
 
@@ -66,10 +69,37 @@ Report inspect(const Soup& input, const InspectOptions& o) {
     topology_and_shape_pass();
     self_intersection_pass();
   }
+  count_cracks(soup, o, r);
   return r;
 }
 
 namespace {
+
+/// Report::crack_pairs: only the corners of intersecting faces can close
+/// such a pair, so only they are searched (find_close_points, exact).
+void count_cracks(const Soup& soup, const InspectOptions& o, Report& r) {
+  if (r.self_intersections.empty() || !(o.crack_ratio > 0)) return;
+  std::vector<Index> corners;
+  for (const FacePair& p : r.self_intersections)
+    for (std::size_t f : {p.first, p.second})
+      for (Index v : soup.face(f)) corners.push_back(v);
+  std::sort(corners.begin(), corners.end());
+  corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+  Soup near;
+  for (Index v : corners) near.points.push_back(soup.points[v]);
+  std::set<std::pair<Index, Index>> close;  // soup indices, a < b
+  for (const auto& [a, b] : find_close_points(near, o.crack_ratio * bbox_diagonal(r)))
+    if (near.points[a] != near.points[b]) close.emplace(corners[a], corners[b]);
+  r.crack_vertex_pairs = close.size();
+  if (close.empty()) return;
+  for (const FacePair& p : r.self_intersections) {
+    bool crack = false;
+    for (Index a : soup.face(p.first))
+      for (Index b : soup.face(p.second))
+        crack = crack || (a != b && close.count({std::min(a, b), std::max(a, b)}));
+    r.crack_pairs += crack;
+  }
+}
 
 void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions& o, Report& r) {
   auto t0 = std::chrono::steady_clock::now();

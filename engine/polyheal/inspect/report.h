@@ -29,6 +29,10 @@ struct InspectOptions {
   /// points, about half a second per million faces on 2 cores, so asked
   /// for; tetgen_ready() requires it.
   bool tetgen_segments = false;
+  /// Intersecting pairs with corners closer than this times the bbox
+  /// diagonal (but not identical) are counted as cracks (Report::crack_pairs);
+  /// the same distance as `degenerate`'s and `repair`'s default weld.
+  double crack_ratio = 1e-9;
   bool parallel = true;            // TBB in the self-intersection pass
   /// Every intersecting pair of the input, sorted, when the caller knows
   /// them already (found by find_self_intersections on the same soup): not
@@ -63,6 +67,14 @@ struct Report {
   std::vector<std::size_t> caps;
   std::vector<std::size_t> needles;
   std::vector<FacePair> self_intersections;
+  /// Self-intersecting pairs (f, g) where a corner of f and a corner of g
+  /// are closer than InspectOptions::crack_ratio x the bbox diagonal but
+  /// not the same point: the cracks a CAD export's rounding leaves (its
+  /// STL writes a shared vertex twice, 1e-16 apart), whose two sides meet
+  /// exactly. A hint, not a verdict: such a pair is a self-intersection.
+  std::size_t crack_pairs = 0;
+  /// The distinct corner pairs that close among those faces' corners.
+  std::size_t crack_vertex_pairs = 0;
   // TetGen's tolerances (not exact defects)
   std::vector<FacePair> sharp_folds;             // adjacent faces folded below tetgen_fold_angle
   std::vector<std::size_t> nearly_degenerate_faces;
