@@ -255,6 +255,14 @@ cmp -s "$tmp/pt1.off" "$tmp/pt2.off" && passes=$((passes+1)) || { fails=$((fails
 expect 1 "a perturbed mesh is not TetGen-ready" -- "$bin" check --tetgen-ready "$tmp/pt1.off"
 expect 2 "perturb rejects an unknown kind" -- "$bin" perturb "$src/fixtures/torus.off" -o "$tmp/pt3.off" --kind noise
 expect 2 "perturb never writes over its input" -- "$bin" perturb "$tmp/pt1.off" -o "$tmp/pt1.off" --kind slivers --overwrite
+# duplicates, about half of them reversed: repair drops the stray copies and
+# keeps every face of the closed anchor (1050 faces) as it was; before, a
+# reversed copy cancelled its face too and the holes were filled anew,
+# 4.3% of the diagonal away (exit 1)
+expect 0 "perturb duplicates" -- "$bin" perturb "$src/fixtures/anchor.off" -o "$tmp/dup.off" --kind duplicates --fraction 0.2
+expect 0 "repair drops stray duplicates of either orientation" -- "$bin" repair "$tmp/dup.off" -o "$tmp/dup_rep.off"
+grep_out "reversed stray copies), .* 0 of 0 holes filled" "$tmp/out" "reversed copies dropped alone, no hole left"
+grep_out "output: 1050 faces, .* kept 1050 input faces exactly" "$tmp/out" "every face of the anchor kept"
 # repair --for tetgen
 expect 0 "repair --for tetgen removes what trips TetGen" -- "$bin" repair "$tmp/pt1.off" -o "$tmp/pt1_tg.off" --for tetgen
 grep_out "TetGen-ready" "$tmp/out" "repair --for tetgen verdict"

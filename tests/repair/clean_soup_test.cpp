@@ -83,21 +83,66 @@ TEST_CASE("clean_soup: a consistently inward shell keeps its orientation (a cavi
   CHECK(inspect(r.soup).signed_volume < 0);
 }
 
-TEST_CASE("clean_soup: duplicates — same-orientation copies keep one, opposite copies cancel", "[clean_soup]") {
+TEST_CASE("clean_soup: duplicates — same-orientation copies keep one, a reversed stray copy goes", "[clean_soup]") {
   Soup cube = stl_cube();
   const Soup reference = cube;
-  // Face 0 twice more in its orientation; face 2 once reversed (a pair that
-  // cancels: then the hole it leaves is filled again).
+  // Face 0 twice more in its orientation; face 2 once reversed: a pair whose
+  // winding numbers cancel, but the cube around it needs face 2 as it was.
   for (int rep = 0; rep < 2; ++rep) cube.add_triangle(cube.indices[0], cube.indices[1], cube.indices[2]);
   cube.add_triangle(cube.indices[6], cube.indices[8], cube.indices[7]);
   // A face repeating an index.
   cube.add_triangle(0, 0, 1);
   const CleanSoupResult r = clean_soup(cube);
-  CHECK(r.report.duplicate_faces_dropped == 2);
-  CHECK(r.report.cancelled_faces == 2);
+  CHECK(r.report.duplicate_faces_dropped == 3);
+  CHECK(r.report.cancelled_faces == 0);
+  CHECK(r.report.opposite_copies_kept == 1);
   CHECK(r.report.repeated_index_faces == 1);
-  CHECK(r.report.holes_filled == 1);
+  CHECK(r.report.holes == 0);  // no face was lost, so nothing is filled
+  CHECK(r.soup.face_count() == 12);
+  CHECK(std::count(r.source.begin(), r.source.end(), -1) == 0);
   check_clean_cube(r, reference);
+}
+
+TEST_CASE("clean_soup: reversed stray copies of adjacent faces all go, each face kept as it was", "[clean_soup]") {
+  // Every face of the cube given a reversed copy but one: each stray copy's
+  // neighbours are themselves cancelled pairs at first, so the faces come
+  // back one after the other from the face that has none.
+  Soup cube = stl_cube();
+  const Soup reference = cube;
+  for (std::size_t f = 1; f < 12; ++f) {
+    const FaceView v = reference.face(f);
+    cube.add_triangle(v[0], v[2], v[1]);
+  }
+  const CleanSoupResult r = clean_soup(cube);
+  CHECK(r.report.opposite_copies_kept == 11);
+  CHECK(r.report.cancelled_faces == 0);
+  CHECK(r.report.holes == 0);
+  CHECK(r.soup.face_count() == 12);
+  CHECK(std::count(r.source.begin(), r.source.end(), -1) == 0);
+  check_clean_cube(r, reference);
+}
+
+TEST_CASE("clean_soup: the wall two touching solids share cancels (a union, not a stray copy)", "[clean_soup]") {
+  // The unit cube and its mirror image across x = 1 (faces reversed to stay
+  // outward): the wall x = 1 appears once in each orientation, and each
+  // solid uses every wall edge once, so the wall is two sheets, not a face
+  // with a stray copy. It cancels, leaving the closed 2 x 1 x 1 box.
+  const Soup a = stl_cube();
+  Soup both = a;
+  for (std::size_t f = 0; f < a.face_count(); ++f) {
+    const Index base = Index(both.points.size());
+    for (const Index v : a.face(f)) both.points.push_back({2 - a.points[v][0], a.points[v][1], a.points[v][2]});
+    both.add_triangle(base, base + 2, base + 1);
+  }
+  CHECK_FALSE(inspect(both).manifold);
+  const CleanSoupResult r = clean_soup(both);
+  CHECK(r.report.cancelled_faces == 4);
+  CHECK(r.report.opposite_copies_kept == 0);
+  CHECK(r.report.holes == 0);
+  const Report rep = inspect(r.soup);
+  CHECK(rep.certified_clean());
+  CHECK(r.soup.face_count() == 20);
+  CHECK(rep.signed_volume == Approx(2.0));
 }
 
 TEST_CASE("clean_soup: a missing face is filled from existing vertices, reported as new", "[clean_soup]") {

@@ -57,6 +57,68 @@ bool same_cycle(const std::vector<P3>& pts, const std::vector<std::size_t>& p, c
   return false;
 }
 
+/// A group of copies of one triangle whose orientations cancel: a copy of
+/// each orientation, and the group's size.
+struct CancelledGroup {
+  std::size_t plus, minus, copies;
+};
+
+/// Cancelling opposite copies is right where they are two sheets (a
+/// double-sided patch, the wall two touching solids share), wrong where one
+/// of them is a face of the surface and the other a stray copy: a closed
+/// solid given a reversed duplicate would lose the face, and the hole left
+/// would be filled anew, away from the input where such holes join. So a
+/// group gets one copy back when that copy is what its edges need among the
+/// faces kept: no kept face uses any of its edges in the same direction, at
+/// most one uses each in the opposite direction, and at least one edge is
+/// so used (the copy closes or continues an oriented surface; the other
+/// orientation would then be misoriented against it). Repeated to a fixed
+/// point, so that adjacent stray copies come back one after the other. On a
+/// double-sided sheet every face is a cancelled group, none has a kept
+/// neighbour, and all still cancel; at a shared wall the two solids use each
+/// wall edge once in each direction, and it still cancels. Returns the
+/// number of groups given a copy back (set in `keep`).
+std::size_t keep_needed_copies(const std::vector<Tri>& tris, const std::vector<CancelledGroup>& groups,
+                               std::vector<char>& keep) {
+  if (groups.empty()) return 0;
+  std::unordered_map<std::uint64_t, std::uint32_t> directed;  // (from << 32 | to) -> kept faces using it
+  auto key = [](Index a, Index b) { return (std::uint64_t(a) << 32) | b; };
+  auto uses = [&](Index a, Index b) {
+    const auto it = directed.find(key(a, b));
+    return it == directed.end() ? 0u : it->second;
+  };
+  for (std::size_t i = 0; i < tris.size(); ++i)
+    if (keep[i])
+      for (int k = 0; k < 3; ++k) ++directed[key(tris[i][k], tris[i][(k + 1) % 3])];
+  auto needed = [&](const Tri& t) {
+    bool used = false;
+    for (int k = 0; k < 3; ++k) {
+      const Index a = t[k], b = t[(k + 1) % 3];
+      const std::uint32_t reverse = uses(b, a);
+      if (uses(a, b) != 0 || reverse > 1) return false;
+      used = used || reverse == 1;
+    }
+    return used;
+  };
+  std::vector<char> done(groups.size(), 0);
+  std::size_t restored = 0;
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+      if (done[g]) continue;
+      for (const std::size_t c : {groups[g].plus, groups[g].minus}) {
+        if (!needed(tris[c])) continue;
+        keep[c] = 1;
+        for (int k = 0; k < 3; ++k) ++directed[key(tris[c][k], tris[c][(k + 1) % 3])];
+        done[g] = 1;
+        ++restored;
+        changed = true;
+        break;
+      }
+    }
+  }
+  return restored;
+}
 
 /// T-junctions: a boundary vertex v within `tol` of the interior of a
 /// boundary edge x-y (of face x-y-c) splits that face into x-v-c, v-y-c (in
@@ -169,7 +231,8 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
 
   // Duplicates: copies of one vertex set. Opposite copies cancel in pairs
   // (their winding-number contributions do); of what remains, one copy of
-  // the prevailing orientation is kept.
+  // the prevailing orientation is kept. A cancelled group is given back one
+  // copy where the surface around it needs exactly that copy (see below).
   {
     std::unordered_map<std::uint64_t, std::vector<std::size_t>> by_set;  // hashed; exact comparison below
     auto sorted = [](Tri t) {
@@ -181,6 +244,7 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
       by_set[(std::uint64_t(s[0]) * 0x9E3779B97F4A7C15ull) ^ (std::uint64_t(s[1]) << 21) ^ s[2]].push_back(i);
     }
     std::vector<char> keep(tris.size(), 1);
+    std::vector<CancelledGroup> cancelled_groups;
     for (auto& [h, list] : by_set) {
       if (list.size() < 2) continue;
       std::vector<char> done(list.size(), 0);
@@ -213,8 +277,19 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
         const std::size_t cancelled = copies.size() - std::size_t(std::abs(net));
         r.cancelled_faces += cancelled;
         r.duplicate_faces_dropped += removed - cancelled;
+        if (net == 0) {
+          const auto plus = std::find_if(copies.begin(), copies.end(), [&](std::size_t i) { return parity(i) > 0; });
+          const auto minus = std::find_if(copies.begin(), copies.end(), [&](std::size_t i) { return parity(i) < 0; });
+          cancelled_groups.push_back({*plus, *minus, copies.size()});
+        }
       }
     }
+    r.opposite_copies_kept = keep_needed_copies(tris, cancelled_groups, keep);
+    for (const CancelledGroup& g : cancelled_groups)
+      if (keep[g.plus] || keep[g.minus]) {  // one copy kept, the others dropped as duplicates
+        r.cancelled_faces -= g.copies;
+        r.duplicate_faces_dropped += g.copies - 1;
+      }
     std::size_t w = 0;
     for (std::size_t i = 0; i < tris.size(); ++i)
       if (keep[i]) {

@@ -4,7 +4,8 @@
 // The first stage of `polyheal repair` (issue 7): weld identical (and, on
 // request, near-identical) vertices; drop faces that repeat a vertex index
 // and duplicate faces (a pair of opposite copies cancels, as it does in the
-// generalised winding number; copies of one orientation keep one); orient
+// generalised winding number, unless one copy is a face the surface around
+// needs and the other a stray copy; copies of one orientation keep one); orient
 // each component consistently (CGAL's orient_polygon_soup, which also splits
 // non-manifold vertices and edges); stitch matching borders; fill holes
 // (CGAL's triangulate_hole: no new vertex). Before stitching, T-junction
@@ -41,6 +42,7 @@ struct CleanSoupReport {
   std::size_t t_junctions = 0;               // boundary vertices inserted into a boundary edge
   std::size_t duplicate_faces_dropped = 0;   // same-orientation copies beyond the first
   std::size_t cancelled_faces = 0;           // opposite copies removed in pairs
+  std::size_t opposite_copies_kept = 0;      // cancelling groups given one copy back: the surface around needed it
   std::size_t reoriented_faces = 0;
   std::size_t split_vertices = 0;            // copies orient_polygon_soup made (non-manifold points)
   std::size_t stitched_edges = 0;

@@ -239,6 +239,7 @@ class Pipeline {
                   {"t_junctions", double(r.t_junctions)},
                   {"duplicate_faces_dropped", double(r.duplicate_faces_dropped)},
                   {"cancelled_faces", double(r.cancelled_faces)},
+                  {"opposite_copies_kept", double(r.opposite_copies_kept)},
                   {"reoriented_faces", double(r.reoriented_faces)},
                   {"split_vertices", double(r.split_vertices)},
                   {"stitched_edges", double(r.stitched_edges)},
@@ -249,7 +250,9 @@ class Pipeline {
       if (r.near_vertices_welded) s.max_displacement = r.max_weld_move;
       std::ostringstream line;
       line << r.repeated_index_faces << " repeated-index and " << r.duplicate_faces_dropped + r.cancelled_faces
-           << " duplicate faces dropped, " << r.t_junctions << " T-junctions closed, " << r.reoriented_faces << " reoriented, " << r.stitched_edges
+           << " duplicate faces dropped";
+      if (r.opposite_copies_kept) line << " (" << r.opposite_copies_kept << " of them reversed stray copies)";
+      line << ", " << r.t_junctions << " T-junctions closed, " << r.reoriented_faces << " reoriented, " << r.stitched_edges
            << " edges stitched, " << r.holes_filled << " of " << r.holes << " holes filled";
       if (r.near_vertices_welded) line << ", " << r.near_vertices_welded << " near vertices welded";
       s.outcome = line.str();
