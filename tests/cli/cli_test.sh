@@ -60,6 +60,7 @@ grep_out '"zero_area": 1' "$tmp/out" "degenerate json counts the zero-area face"
 printf 'OFF\n5 5 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 1 1\n3 0 1 2\n3 0 1 3\n3 0 1 4\n3 1 2 3\n3 0 2 3\n' > "$tmp/nonmanifold.off"
 expect 2 "degenerate refuses a non-manifold soup" -- "$bin" degenerate "$tmp/nonmanifold.off" -o "$tmp/nm_out.off"
 grep_out "nonmanifold.off: not an oriented 2-manifold mesh" "$tmp/err" "non-manifold refusal names the file"
+grep_out "; .polyheal repair. makes one" "$tmp/err" "non-manifold refusal says what makes a manifold mesh"
 expect 2 "degenerate bad tolerance" -- "$bin" degenerate "$tmp/tjunction.off" -o "$tmp/x.off" --tolerance abc
 expect 2 "degenerate malformed input" -- "$bin" degenerate "$tmp/bad.off" -o "$tmp/x.off"
 [ ! -e "$tmp/x.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: output written on error"; }
@@ -142,7 +143,8 @@ expect 1 "offset --raw is not certified" -- "$bin" offset --raw "$tmp/cube.off" 
 expect 1 "the raw inward offset self-intersects" -- "$bin" check "$tmp/cube_raw.off"
 expect 2 "offset needs a distance" -- "$bin" offset "$tmp/cube.off" -o "$tmp/w.off"
 expect 2 "offset refuses an open mesh" -- "$bin" offset "$tmp/open.off" -d 0.1 -o "$tmp/w.off"
-grep_out "open.off: edge" "$tmp/err" "offset names the file and the edge"
+grep_out "offset needs a closed, oriented 2-manifold; .polyheal repair. makes one" "$tmp/err" "offset's refusal says what closes the mesh"
+grep_out "open.off: not an oriented 2-manifold mesh: edge" "$tmp/err" "offset names the file and the edge"
 [ ! -e "$tmp/w.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: offset wrote output on error"; }
 expect 0 "offset help" -- "$bin" offset --help
 grep_out "spherical patches" "$tmp/out" "offset help explains the raw offset"
