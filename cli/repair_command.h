@@ -73,6 +73,10 @@ template <class Repair>
 auto run_repair(const RepairFiles& f, Repair repair) -> decltype(repair()) {
   try {
     return repair();
+  } catch (const NotManifold& e) {
+    throw std::runtime_error(f.input + ": " + e.what() +
+                             "; `polyheal repair` makes one (its clean stage drops duplicate faces, "
+                             "orients, splits non-manifold edges and vertices, and fills holes)");
   } catch (const UnsupportedInput& e) {
     throw std::runtime_error(f.input + ": " + e.what());
   }

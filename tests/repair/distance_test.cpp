@@ -297,3 +297,23 @@ TEST_CASE("distance: nearest-triangle and box queries agree with a search of eve
     CHECK(std::is_sorted(got.begin(), got.end()));
   }
 }
+
+TEST_CASE("distance: a wall removed inside a union counts as removed, not as moved", "[repair][distance]") {
+  // Two unit cubes touching face to face, against their union (the 2 x 1 x 1
+  // box): skipping what lies inside the union, nothing of the input is far
+  // from it. The shared wall is inside up to its rim, which lies on the
+  // union's surface, so pieces along the rim keep splitting until the split
+  // budget runs out; what is left then counts with its size. Depth first,
+  // the budget went on one corner of the wall and a quarter of it counted
+  // (0.35); largest piece first, what is left is small.
+  const Soup cubes = test::concat(test::box({0, 0, 0}, {1, 1, 1}), test::box({1, 0, 0}, {2, 1, 1}));
+  const Soup united = test::box({0, 0, 0}, {2, 1, 1});
+  auto inside = [](const Point3d& p) { return p[0] > 0 && p[0] < 2 && p[1] > 0 && p[1] < 1 && p[2] > 0 && p[2] < 1; };
+  const double error = 1e-3;
+  const double d = detail::one_sided_distance_skipping(cubes, united, error, inside);
+  INFO("distance from what is outside the union: " << d);
+  CHECK(d >= 0);
+  CHECK(d <= 5 * error);
+  // without skipping, the wall's centre is half a unit from the union's surface
+  CHECK(detail::one_sided_distances(cubes, united, error)[0] >= 0.5 - 1e-12);
+}

@@ -7,6 +7,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace polyheal {
 
@@ -35,6 +36,17 @@ class InputError : public std::runtime_error {
 class UnsupportedInput : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+};
+
+/// The input is not an oriented 2-manifold (pinch vertices aside) and the
+/// command needs one: its first problem and how many more. The CLI adds
+/// what makes one (`polyheal repair`'s clean stage).
+class NotManifold : public UnsupportedInput {
+ public:
+  explicit NotManifold(const std::vector<std::string>& problems, const std::string& needs = "")
+      : UnsupportedInput("not an oriented 2-manifold mesh: " + (problems.empty() ? std::string("?") : problems.front()) +
+                         (problems.size() > 1 ? " (and " + std::to_string(problems.size() - 1) + " more problems)" : "") +
+                         (needs.empty() ? "" : "; " + needs)) {}
 };
 
 /// Failure to write an output file (permissions, disk full, refusal to

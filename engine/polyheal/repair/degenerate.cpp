@@ -1209,10 +1209,7 @@ DegenerateResult remove_degenerate_faces(const Soup& input, const DegenerateOpti
   r.topology_in = topology_of(*in_mesh);
   r.max_displacement = r.max_weld_move;
   if (!built.ok)
-    throw UnsupportedInput("not an oriented 2-manifold mesh: " + built.problems.front() +
-                           (built.problems.size() > 1 ? " (and " + std::to_string(built.problems.size() - 1) +
-                                                            " more problems)"
-                                                      : ""));
+    throw NotManifold(built.problems);
   mark_split_pinches(mesh);  // the copies must stay, and are one vertex to the oracle
   const detail::SurfaceDistance distance(clean);
   Pipeline pipeline(mesh, distance, o, r);

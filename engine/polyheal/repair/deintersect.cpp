@@ -882,11 +882,7 @@ DeintersectResult remove_self_intersections(const Soup& input, const Deintersect
   std::size_t pinches = 0;
   const MeshBuildResult built = soup_to_mesh_splitting_pinches(input, mesh, &pinches);
   if (!built.ok)
-    throw UnsupportedInput("not an oriented 2-manifold mesh: " + built.problems.front() +
-                           (built.problems.size() > 1
-                                ? " (and " + std::to_string(built.problems.size() - 1) + " more problems)"
-                                : "") +
-                           "; deintersect needs a manifold mesh (pinch vertices are fine)");
+    throw NotManifold(built.problems, "deintersect needs a manifold mesh (pinch vertices are fine)");
   mark_split_pinches(mesh);
   InspectOptions io;
   io.self_intersections = o.known_pairs;

@@ -61,10 +61,10 @@ class RawOffset {
       std::size_t m = k;
       while (m < keyed.size() && keyed[m].first == keyed[k].first) ++m;
       if (m - k != 2 || tail(keyed[k].second) == tail(keyed[k + 1].second))
-        throw UnsupportedInput("edge (" + std::to_string(keyed[k].first >> 32) + ", " +
-                               std::to_string(keyed[k].first & 0xFFFFFFFFu) +
-                               ") is not shared by exactly two faces in opposite directions: offset needs a "
-                               "closed, oriented 2-manifold");
+        throw NotManifold({"edge (" + std::to_string(keyed[k].first >> 32) + ", " +
+                           std::to_string(keyed[k].first & 0xFFFFFFFFu) +
+                           ") is not shared by exactly two faces in opposite directions"},
+                          "offset needs a closed, oriented 2-manifold");
       twin_[keyed[k].second] = keyed[k + 1].second;
       twin_[keyed[k + 1].second] = keyed[k].second;
       k = m;
