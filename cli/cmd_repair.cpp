@@ -241,12 +241,14 @@ void run(RepairArgs& args, int& exit_code) {
     if (o.tetgen.not_run.empty()) args.options.tetgen_accepts = [&o](const Soup& s) { return o.tetgen.accepts(s); };
   }
   parse_length("--max-deviation", args.max_deviation, args.max_deviation_abs, args.max_deviation_ratio);
+  args.options.max_deviation = args.max_deviation_abs;
+  args.options.max_deviation_ratio = args.max_deviation_ratio;
 
   const auto t0 = std::chrono::steady_clock::now();
   RepairResult result = run_repair(args, [&] { return repair(input, args.options); });
   o.report = std::move(result.report);
   o.repair_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  o.max_deviation = args.max_deviation_abs > 0 ? args.max_deviation_abs : args.max_deviation_ratio * o.report.diagonal;
+  o.max_deviation = max_deviation_of(args.options, o.report.diagonal);
 
   finish_repair(
       result.soup, args, progress, o.write_s,

@@ -237,3 +237,34 @@ TEST_CASE("repair --for tetgen: a surface TetGen itself refuses is a defect, not
   CHECK_FALSE(none.report.stages.empty());
   for (const StageReport& s : none.report.stages) CHECK(s.defects_after >= 1);
 }
+
+TEST_CASE("repair: where local moves leave the surface beyond --max-deviation, a union within it is kept",
+          "[pipeline]") {
+  // Two boxes touching on part of a face (the second's face x = 1 lies inside
+  // the first's): every face pair there overlaps, coplanar. Local moves
+  // push the boxes apart, farther than a tight limit allows; the union
+  // joins them and removes the contact patch, which lies inside it, moving
+  // nothing. With the limit it is kept although it has one component where
+  // the input and the local moves' result have two.
+  const Soup in = test::concat(test::box({0, 0, 0}, {1, 1, 1}), test::box({1, 0.5, 0.25}, {2, 1.5, 0.75}));
+  RepairOptions o;
+  o.max_deviation_ratio = 0.002;
+  const RepairResult r = repair(in, o);
+  const double limit = max_deviation_of(o, r.report.diagonal);
+  const Assessment a = written(in, r, "touching_boxes.off", limit);
+  CHECK(a.certified);
+  CHECK(a.within_deviation);
+  CHECK(a.deviation <= limit);
+  CHECK(a.dropped_components == 0);
+  CHECK(a.components_in == 2);
+  CHECK(a.components_out == 1);
+  CHECK(ran(r.report, "regularize (without local moves)", true));
+
+  // what the local moves alone make: certified, but beyond the limit
+  o.steps = parse_steps("deintersect");
+  const RepairResult moves = repair(in, o);
+  const Assessment m = written(in, moves, "touching_boxes_moves.off", limit);
+  CHECK(m.certified);
+  CHECK(m.components_out == 2);
+  CHECK_FALSE(m.within_deviation);
+}

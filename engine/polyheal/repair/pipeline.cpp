@@ -37,6 +37,7 @@ struct State {
   Report report;
   std::size_t defects = 0;
   double hausdorff = 0;  // to the input
+  std::optional<bool> within;  // assess()ed within the deviation limit, no component dropped (asked lazily)
 };
 
 /// The surface without its closed components that are no larger than
@@ -158,6 +159,18 @@ class Pipeline {
     return s;
   }
 
+  double deviation_limit() const { return max_deviation_of(o_, result_.report.diagonal); }
+
+  /// What the exit code asks of the written file (assess()): the surface
+  /// moved no more than the limit and no input component was dropped.
+  bool within_limit(State& s, const std::vector<std::array<Point3d, 3>>& fills) const {
+    if (!s.within) {
+      const Assessment a = assess(input_, result_.input, s.soup, deviation_limit(), o_.for_tetgen, fills);
+      s.within = a.within_deviation && a.dropped_components == 0;
+    }
+    return *s.within;
+  }
+
   bool needs_clean() const {
     const Report& r = cur_.report;
     return !r.closed || !r.manifold || !r.oriented || !r.duplicate_faces.empty() || r.non_triangle_faces > 0 ||
@@ -189,9 +202,22 @@ class Pipeline {
       // of opposite copies cancels to nothing in the clean stage).
       const bool empty = next.soup.face_count() == 0;
       const bool both_ok = next_ok && done();
-      const bool better = !empty && (both_ok ? topology_of(next.report) == topology_of(cur_.report) &&
-                                                   next.hausdorff + bound < cur_.hausdorff
-                                             : next_ok || next.defects < cur_.defects);
+      bool better = !empty && (both_ok ? topology_of(next.report) == topology_of(cur_.report) &&
+                                             next.hausdorff + bound < cur_.hausdorff
+                                       : next_ok || next.defects < cur_.defects);
+      // Both certified, but the current surface moved beyond the deviation
+      // limit (local moves pushing apart parts that touch or overlap): a
+      // candidate within it that drops no component is kept though it has
+      // another topology or a larger Hausdorff distance — a union merges
+      // what overlapped and removes what lies inside it, moving nothing.
+      // (The Hausdorff distance bounds the deviation, so a current surface
+      // within the limit by it is never assessed.)
+      if (!better && both_ok && !empty && cur_.hausdorff > deviation_limit() &&
+          !within_limit(cur_, result_.hole_fills) && within_limit(next, pending_fills_)) {
+        better = true;
+        s.outcome += (s.outcome.empty() ? "" : "; ") +
+                     std::string("kept: within --max-deviation, where the current surface is not");
+      }
       if (better) {
         s.accepted = true;
         cur_ = std::move(next);
@@ -544,6 +570,10 @@ std::size_t defect_count(const Report& r, bool for_tetgen) {
 bool certified(const Report& r, bool for_tetgen) { return for_tetgen ? r.tetgen_ready() : r.certified_clean(); }
 
 RepairResult repair(const Soup& input, const RepairOptions& options) { return Pipeline(input, options).run(); }
+
+double max_deviation_of(const RepairOptions& o, double diagonal) {
+  return o.max_deviation > 0 ? o.max_deviation : o.max_deviation_ratio * diagonal;
+}
 
 Assessment assess(const Soup& input, const Report& in, const Soup& written, double max_deviation, bool for_tetgen,
                   const std::vector<std::array<Point3d, 3>>& hole_fills) {

@@ -64,6 +64,11 @@ struct RepairOptions {
   bool fill_holes = true;
   std::size_t max_hole_edges = 0;   // leave longer boundary loops open (0: fill all)
   bool for_tetgen = false;          // also remove what trips TetGen's tolerances (Report::tetgen_ready)
+  /// Model units: how far the surface may move (the CLI's --max-deviation);
+  /// 0: max_deviation_ratio x bbox diagonal. Where local moves leave the
+  /// surface farther, a certified union within it is kept instead.
+  double max_deviation = 0;
+  double max_deviation_ratio = 0.01;
   /// With for_tetgen: TetGen itself, run on each surface our checks call
   /// TetGen-ready (the CLI runs `tetgen -pQ` when installed); false marks
   /// it refused (Report::tetgen_refused), a defect the later stages work on
@@ -113,6 +118,9 @@ std::vector<std::pair<std::string, std::size_t>> defect_kinds(const Report& r, b
 bool certified(const Report& r, bool for_tetgen);
 
 RepairResult repair(const Soup& input, const RepairOptions& options = {});
+
+/// options.max_deviation, or its ratio of a bbox diagonal.
+double max_deviation_of(const RepairOptions& options, double diagonal);
 
 /// What a repair did to the surface, measured on the file as written.
 struct Assessment {
