@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
+#include "report_json.h"
 #include "polyheal/inspect/report.h"
 #include "polyheal/io/read.h"
 #include "progress.h"
@@ -88,6 +89,8 @@ nlohmann::json to_json(const CheckArgs& args, const Report& r, double read_s, do
         {"epsilon", args.inspect.tetgen_epsilon}}},
       {"shape",
        {{"signed_volume", r.signed_volume},
+        {"volume_sign", r.volume_sign},
+        {"inward_components", r.inward_components},
         {"bbox", {{"min", r.bbox_min}, {"max", r.bbox_max}}}}},
       {"seconds",
        {{"read", read_s},
@@ -147,6 +150,8 @@ void print_text(const CheckArgs& args, const Report& r, double total_s) {
               r.sharp_folds.size(), args.inspect.tetgen_fold_angle, r.nearly_degenerate_faces.size(), near.c_str(),
               close.c_str(), args.inspect.tetgen_epsilon);
   if (r.closed && r.oriented) std::printf("  signed volume %.17g\n", r.signed_volume);
+  if (const std::string note = inward_note(r); !note.empty()) std::printf("  note: %s\n", note.c_str());
+
   if (args.list) {
     auto num = [](const std::size_t& x) { return std::to_string(x); };
     auto idx = [](const Index& x) { return std::to_string(x); };

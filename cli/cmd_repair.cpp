@@ -191,6 +191,7 @@ void print_text(const RepairArgs& args, const Outcome& o) {
   if (a.dropped_components)
     std::printf("  dropped components: %zu (%zu inside the output's volume)\n", a.dropped_components,
                 a.absorbed_components);
+  if (const std::string note = inward_note(a.out); !note.empty()) std::printf("  note: %s\n", note.c_str());
   const std::vector<std::string> d = defects(a.out);
   std::string verdict = a.certified ? (args.options.for_tetgen ? "CERTIFIED CLEAN and TetGen-ready" : "CERTIFIED CLEAN")
                                     : "DEFECTS REMAIN:";

@@ -18,6 +18,19 @@ inline double peak_memory_mb() {
   return double(u.ru_maxrss) / 1024.0;  // Linux: kilobytes
 }
 
+/// A note on a closed, oriented surface whose faces point inwards, or ""
+/// (not a defect: a consistently oriented surface may mean a cavity, but a
+/// solid the wrong way out is wrong for most tools). Exact signs
+/// (Report::volume_sign, inward_components).
+inline std::string inward_note(const Report& r) {
+  if (!r.closed || !r.oriented) return "";
+  if (r.volume_sign < 0) return "the surface encloses negative volume (exact sign): its faces point inwards, inside out";
+  if (r.inward_components == 0) return "";
+  return std::to_string(r.inward_components) + " of " + std::to_string(r.components) + " components enclose" +
+         (r.inward_components == 1 ? "s" : "") +
+         " negative volume (exact sign): a cavity if inside another component, else inside out";
+}
+
 /// defect_kinds() as phrases: "3 boundary edges", ..., "no face left".
 inline std::vector<std::string> defect_phrases(const std::vector<std::pair<std::string, std::size_t>>& kinds) {
   std::vector<std::string> d;

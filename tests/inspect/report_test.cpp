@@ -251,3 +251,35 @@ TEST_CASE("inspect: a vertex within TetGen's tolerance of an edge it is not on s
     CHECK(test::tetgen_meshes(p, near ? "tg_near_edge.off" : "tg_far_edge.off", "-pQ") == !near);
   }
 }
+
+TEST_CASE("inspect: the sign of the enclosed volume, exactly, for the whole surface and per component", "[inspect]") {
+  const Report out = inspect(test::box({0, 0, 0}, {1, 1, 1}));
+  CHECK(out.volume_sign == 1);
+  CHECK(out.inward_components == 0);
+  const Report in = inspect(test::box({0, 0, 0}, {1, 1, 1}, true));
+  CHECK(in.certified_clean());  // a consistent orientation: not a defect
+  CHECK(in.volume_sign == -1);
+  CHECK(in.inward_components == 1);
+  // a cavity: the whole encloses positive volume, one component negative
+  const Report cavity = inspect(test::concat(test::box({0, 0, 0}, {3, 3, 3}), test::box({1, 1, 1}, {2, 2, 2}, true)));
+  CHECK(cavity.volume_sign == 1);
+  CHECK(cavity.inward_components == 1);
+  // A millimetre box 1e8 from the origin: about the origin each determinant
+  // is ~1e24 and the volume 1e-9 (the long double sum gave 97756); the sign
+  // is exact, and the measured volume is summed about the bbox centre.
+  for (const bool inward : {false, true}) {
+    const Report far = inspect(test::box({1e8, 1e8, 1e8}, {1e8 + 1e-3, 1e8 + 1e-3, 1e8 + 1e-3}, inward));
+    REQUIRE(far.closed);
+    CHECK(far.volume_sign == (inward ? -1 : 1));
+    const double side = (1e8 + 1e-3) - 1e8;  // the double box's side, exactly (Sterbenz)
+    CHECK(far.signed_volume == Approx((inward ? -1 : 1) * side * side * side).epsilon(1e-9));
+  }
+  // two triangles back to back: closed and oriented, volume exactly zero
+  const Report flat = inspect(test::soup({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}, {0, 2, 1}}));
+  CHECK(flat.closed);
+  CHECK(flat.volume_sign == 0);
+  CHECK(flat.inward_components == 0);
+  // open: not asked
+  const Report open = inspect(test::soup({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 2, 1}}));
+  CHECK(open.volume_sign == 0);
+}

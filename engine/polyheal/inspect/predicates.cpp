@@ -325,4 +325,21 @@ bool is_nearly_degenerate(const Point3d& a, const Point3d& b, const Point3d& c, 
   });
 }
 
+int enclosed_volume_sign(const Soup& soup, const std::vector<std::size_t>& faces) {
+  return filtered([&](auto nt) {
+    using NT = decltype(nt);
+    NT volume = 0;
+    for (std::size_t f : faces) {
+      const FaceView v = soup.face(f);
+      const Point3d& a = soup.points[v[0]];
+      const Vec<NT> pa{NT(a[0]), NT(a[1]), NT(a[2])};
+      for (std::size_t k = 1; k + 1 < v.size(); ++k) {
+        const Point3d &b = soup.points[v[k]], &c = soup.points[v[k + 1]];
+        volume += dot(pa, cross(Vec<NT>{NT(b[0]), NT(b[1]), NT(b[2])}, Vec<NT>{NT(c[0]), NT(c[1]), NT(c[2])}));
+      }
+    }
+    return static_cast<int>(static_cast<CGAL::Sign>(CGAL::sign(volume)));
+  });
+}
+
 }  // namespace polyheal

@@ -90,6 +90,11 @@ struct Report {
   // shape
   bool closed = false, manifold = false, oriented = false;
   double signed_volume = 0.0;  // double sum of tetrahedra; meaningful when closed and oriented
+  // Closed and oriented only (0 otherwise), exact: the sign of the enclosed
+  // volume, and the components whose own volume is negative (faces pointing
+  // inwards: a cavity if inside another component, else inside out).
+  int volume_sign = 0;
+  std::size_t inward_components = 0;
   std::array<double, 3> bbox_min{}, bbox_max{};
   // time per stage, seconds
   double seconds_topology = 0, seconds_shape = 0, seconds_self_intersections = 0;
