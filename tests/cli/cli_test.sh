@@ -150,6 +150,16 @@ expect 2 "offset needs a distance" -- "$bin" offset "$tmp/cube.off" -o "$tmp/w.o
 expect 2 "offset refuses an open mesh" -- "$bin" offset "$tmp/open.off" -d 0.1 -o "$tmp/w.off"
 grep_out "offset needs a closed, oriented 2-manifold; .polyheal repair. makes one" "$tmp/err" "offset's refusal says what closes the mesh"
 grep_out "open.off: not an oriented 2-manifold mesh: edge" "$tmp/err" "offset names the file and the edge"
+# a tetrahedron 1e-160 across: the raw offset's double normals would underflow
+printf 'OFF\n4 4 0\n0 0 0\n1e-160 0 0\n0 1e-160 0\n0 0 1e-160\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n' > "$tmp/tiny.off"
+expect 0 "a tetrahedron 1e-160 across is clean (exact predicates at any scale)" -- "$bin" check "$tmp/tiny.off"
+expect 2 "offset refuses a mesh too small for its doubles" -- "$bin" offset "$tmp/tiny.off" -d 2e-161 -o "$tmp/w.off"
+grep_out "the mesh spans 1e-160: offset builds its raw surface in doubles" "$tmp/err" "offset says why it refuses the scale"
+expect 2 "offset refuses a distance the coordinates cannot resolve" -- "$bin" offset "$src/fixtures/torus.off" -d 1e-20 -o "$tmp/w.off"
+grep_out "is below 1e-12 of the mesh's extent" "$tmp/err" "offset says the distance is below resolution"
+printf 'OFF\n4 4 0\n0 0 0\n1e300 0 0\n0 1e300 0\n0 0 1e300\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n' > "$tmp/huge.off"
+expect 2 "check --tetgen-ready refuses coordinates beyond 1e150 (was SIGFPE)" -- "$bin" check --tetgen-ready "$tmp/huge.off"
+grep_out "huge.off:line 4: coordinate '1e300' is beyond" "$tmp/err" "the refusal names file, line and value"
 [ ! -e "$tmp/w.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: offset wrote output on error"; }
 expect 0 "offset help" -- "$bin" offset --help
 grep_out "spherical patches" "$tmp/out" "offset help explains the raw offset"

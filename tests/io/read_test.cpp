@@ -91,6 +91,17 @@ TEST_CASE("read: malformed input gives one clear error with position", "[io][smo
        "byte 172", "declares 3 'vertex' records but only 20 bytes follow"},
       {"binary garbage as OBJ", "garbage.obj", std::string("\x01\x02\x03 binary\n", 11), "line 1",
        "not an OBJ statement"},
+      // beyond +-1e150 a bbox diagonal (and any tolerance built from it)
+      // overflows; `check --tetgen-ready` and `union` died of SIGFPE there
+      {"coordinate beyond 1e150 (OFF)", "huge.off",
+       "OFF\n4 4 0\n0 0 0\n1e300 0 0\n0 1e300 0\n0 0 1e300\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n", "line 4",
+       "'1e300' is beyond +-1e150"},
+      {"coordinate beyond 1e150 (OBJ)", "huge.obj", "v 0 0 0\nv -2e151 0 0\nv 0 1 0\nf 1 2 3\n", "line 2",
+       "beyond +-1e150"},
+      {"coordinate beyond 1e150 (PLY ascii)", "huge.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+       "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1e200 0 0\n0 1 0\n3 0 1 2\n",
+       "line 11", "beyond +-1e150"},
   };
   for (const Case& c : cases) {
     INFO(c.what);
@@ -118,6 +129,10 @@ TEST_CASE("read: coordinates are parsed to the exact double", "[io]") {
   CHECK(s.points[0][0] == 0.1);
   CHECK(s.points[0][1] == -0.30000000000000004);
   CHECK(s.points[0][2] == 1e-320);  // subnormal survives
+  // the largest magnitude accepted, kMaxCoordinate, itself
+  const std::string edge = scratch("edge.off");
+  write_bytes(edge, "OFF\n3 1 0\n1e150 0 0\n-1e150 0 0\n0 1 0\n3 0 1 2\n");
+  CHECK(read_soup(edge).points[1][0] == -kMaxCoordinate);
 }
 
 TEST_CASE("read: OBJ groups, polygons, negative and slashed indices", "[io]") {

@@ -326,6 +326,10 @@ bool is_nearly_degenerate(const Point3d& a, const Point3d& b, const Point3d& c, 
 }
 
 int enclosed_volume_sign(const Soup& soup, const std::vector<std::size_t>& faces) {
+  for (std::size_t f : faces)  // readers refuse non-finite points; a computed soup might hold one
+    for (Index i : soup.face(f))
+      if (!std::isfinite(soup.points[i][0]) || !std::isfinite(soup.points[i][1]) || !std::isfinite(soup.points[i][2]))
+        return 0;
   return filtered([&](auto nt) {
     using NT = decltype(nt);
     NT volume = 0;

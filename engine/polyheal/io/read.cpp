@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <filesystem>
@@ -20,6 +21,13 @@
 
 namespace polyheal {
 namespace {
+
+/// Why a coordinate beyond kMaxCoordinate is refused.
+std::string beyond_range(std::string_view value) {
+  return "coordinate '" + std::string(value.substr(0, 40)) +
+         "' is beyond +-1e150, the range within which polyheal's distances and tolerances are finite";
+}
+
 
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
@@ -90,6 +98,7 @@ struct Text {
     if (ec != std::errc() || ptr != s.data() + s.size() || s.empty())
       fail(std::string("non-numeric ") + what + " '" + std::string(t.substr(0, 40)) + "'");
     if (!std::isfinite(v)) fail(std::string("non-finite ") + what + " '" + std::string(t) + "'");
+    if (std::string_view(what) == "coordinate" && std::fabs(v) > kMaxCoordinate) fail(beyond_range(t));
     return v;
   }
   long long parse_int(std::string_view t, const char* what) const {
@@ -659,8 +668,19 @@ Soup parse_ply(std::string_view bytes, const std::string& name) {
           return v;
         };
         if (!p.is_list) {
+          const std::size_t at = bin.pos;
           double v = value(p.type, "value");
-          if (is_vert) for (int a = 0; a < 3; ++a) if (int(k) == xyz[a]) pt[a] = v;
+          if (is_vert) for (int a = 0; a < 3; ++a) if (int(k) == xyz[a]) {
+            pt[a] = v;
+            if (std::fabs(v) > kMaxCoordinate) {
+              char text[32];
+              std::snprintf(text, sizeof text, "%.17g", v);
+              const std::string why = beyond_range(text);
+              if (format == ascii) t.fail(why);
+              bin.pos = at;
+              bin.fail(why);
+            }
+          }
           if (is_face && int(k) == group_prop) {
             const long long id = std::llround(v);
             const auto [it, inserted] = group_of_value.emplace(id, std::int32_t(s.group_names.size()));

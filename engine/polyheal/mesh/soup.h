@@ -15,6 +15,12 @@ namespace polyheal {
 using Point3d = std::array<double, 3>;
 using Index = std::uint32_t;
 
+/// The largest coordinate magnitude the readers accept. Predicates are exact
+/// at any magnitude, but tolerances and distances are doubles: squared
+/// lengths of a mesh within +-1e150 stay finite (beyond it a bbox diagonal
+/// overflows to infinity and a tolerance built from it has no exact value).
+inline constexpr double kMaxCoordinate = 1e150;
+
 /// A read-only view of one face's vertex indices.
 struct FaceView {
   const Index* first;

@@ -5,10 +5,14 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <string>
+#include <limits>
+#include <cstdio>
 #include <map>
 #include <numeric>
 #include <utility>
 
+#include "polyheal/inspect/predicates.h"
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/union_find.h"
 #include "polyheal/mesh/vec3.h"
@@ -43,8 +47,23 @@ class RawOffset {
     normal_.resize(F);
     for (std::size_t f = 0; f < F; ++f) {
       const FaceView v = in.face(f);
-      const Vec n = cross(sub(in.points[v[1]], in.points[v[0]]), sub(in.points[v[2]], in.points[v[0]]));
-      if (!(norm(n) > 0)) throw UnsupportedInput("face " + std::to_string(f) + " has zero area; remove it first");
+      const Point3d &a = in.points[v[0]], &b = in.points[v[1]], &c = in.points[v[2]];
+      // the edges scaled by a power of two (exactly) to about unit length,
+      // so that the cross product neither underflows nor overflows
+      Vec u = sub(b, a), w = sub(c, a);
+      const double m = std::max({std::fabs(u[0]), std::fabs(u[1]), std::fabs(u[2]), std::fabs(w[0]), std::fabs(w[1]),
+                                 std::fabs(w[2])});
+      if (m > 0 && std::isfinite(m))
+        for (int k = 0; k < 3; ++k) {
+          u[k] = std::ldexp(u[k], -std::ilogb(m));
+          w[k] = std::ldexp(w[k], -std::ilogb(m));
+        }
+      const Vec n = cross(u, w);
+      if (!(norm(n) > 0) || !std::isfinite(norm(n)))
+        throw UnsupportedInput("face " + std::to_string(f) +
+                               (is_collinear(a, b, c) ? " has zero area (collinear corners, exactly); remove it first"
+                                                      : " is too thin for its normal to have a direction in doubles; "
+                                                        "remove it first (polyheal degenerate)"));
       normal_[f] = unit(n);
     }
     // half-edge twins: half-edge 3f+e runs corner e -> corner e+1 of face f
@@ -355,6 +374,33 @@ OffsetResult offset(const Soup& input, const OffsetOptions& o) {
   OffsetReport& r = result.report;
   if (!(o.distance != 0) || !std::isfinite(o.distance)) throw UnsupportedInput("the offset distance must be non-zero");
   if (!input.is_triangle_soup()) throw UnsupportedInput("not a triangle mesh (polygons with more than 3 corners)");
+  {
+    // The raw offset is built in doubles (normals, strip and patch points),
+    // whose squared lengths underflow on a mesh far below unit scale (a cube
+    // of side 1e-100 lost every face), and a distance below the coordinates'
+    // resolution moves nothing (every face then looks like a fold).
+    double extent = 0;
+    for (int a = 0; a < 3; ++a) {
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      for (Index v : input.indices) {
+        lo = std::min(lo, input.points[v][a]);
+        hi = std::max(hi, input.points[v][a]);
+      }
+      if (hi >= lo) extent = std::max(extent, hi - lo);
+    }
+    auto g = [](double x) {
+      char t[32];
+      std::snprintf(t, sizeof t, "%g", x);
+      return std::string(t);
+    };
+    if (extent > 0 && (extent < 1e-50 || extent > 1e100))
+      throw UnsupportedInput("the mesh spans " + g(extent) +
+                             ": offset builds its raw surface in doubles and needs an extent within [1e-50, 1e100] "
+                             "(scale the mesh first)");
+    if (std::abs(o.distance) < 1e-12 * extent)
+      throw UnsupportedInput("the offset distance " + g(o.distance) + " is below 1e-12 of the mesh's extent " +
+                             g(extent) + ": its coordinates cannot resolve it");
+  }
   r.distance = o.distance;
   r.tolerance = o.tolerance > 0 ? o.tolerance : 0.01 * std::abs(o.distance);
   const double ratio = std::min(1.0, r.tolerance / std::abs(o.distance));
