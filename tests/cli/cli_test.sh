@@ -198,6 +198,10 @@ expect 2 "rebuild never writes over its input" -- "$bin" rebuild "$tmp/sheet.off
 expect 0 "rebuild help" -- "$bin" rebuild --help
 grep_out "winding" "$tmp/out" "rebuild help explains the classification"
 # polyheal repair, certificates, compare
+printf 'OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n' > "$tmp/no_faces.off"
+expect 2 "repair refuses a file with no faces" -- "$bin" repair "$tmp/no_faces.off" -o "$tmp/nf_out.off"
+grep_out "no_faces.off: no faces: nothing to repair" "$tmp/err" "repair says there is nothing to repair"
+[ ! -e "$tmp/nf_out.off" ] && passes=$((passes+1)) || { fails=$((fails+1)); echo "FAIL: repair wrote an output for an input with no faces"; }
 expect 0 "repair frees the coarse tube" -- "$bin" repair "$src/fixtures/tube_edge3.0.off" -o "$tmp/rp_tube.off" --certificate "$tmp/rp_tube.json" --provenance "$tmp/rp_tube.prov"
 grep_out "deintersect" "$tmp/out" "repair names the stage it ran"
 grep_out "CERTIFIED CLEAN" "$tmp/out" "repair verdict printed"

@@ -569,7 +569,10 @@ std::size_t defect_count(const Report& r, bool for_tetgen) {
 
 bool certified(const Report& r, bool for_tetgen) { return for_tetgen ? r.tetgen_ready() : r.certified_clean(); }
 
-RepairResult repair(const Soup& input, const RepairOptions& options) { return Pipeline(input, options).run(); }
+RepairResult repair(const Soup& input, const RepairOptions& options) {
+  if (input.face_count() == 0) throw UnsupportedInput("no faces: nothing to repair");
+  return Pipeline(input, options).run();
+}
 
 double max_deviation_of(const RepairOptions& o, double diagonal) {
   return o.max_deviation > 0 ? o.max_deviation : o.max_deviation_ratio * diagonal;
