@@ -28,7 +28,6 @@ struct RepairArgs : RepairFiles {
   std::string steps = "all", weld, t_junction, max_deviation = "1%", certificate, provenance, for_tool, smesh;
   bool no_fill = false, drop_enclosed = false, no_tetgen_run = false;
   RepairOptions options;
-  double max_deviation_abs = 0, max_deviation_ratio = 0;
 };
 
 /// TetGen itself on the surfaces `--for tetgen` calls ready (kTetgenSwitches):
@@ -241,9 +240,7 @@ void run(RepairArgs& args, int& exit_code) {
     o.tetgen.not_run = args.no_tetgen_run ? "--no-tetgen-run" : !tetgen_installed() ? "tetgen is not installed" : "";
     if (o.tetgen.not_run.empty()) args.options.tetgen_accepts = [&o](const Soup& s) { return o.tetgen.accepts(s); };
   }
-  parse_length("--max-deviation", args.max_deviation, args.max_deviation_abs, args.max_deviation_ratio);
-  args.options.max_deviation = args.max_deviation_abs;
-  args.options.max_deviation_ratio = args.max_deviation_ratio;
+  parse_length("--max-deviation", args.max_deviation, args.options.max_deviation, args.options.max_deviation_ratio);
 
   const auto t0 = std::chrono::steady_clock::now();
   RepairResult result = run_repair(args, [&] { return repair(input, args.options); });

@@ -215,11 +215,16 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
   if (r.closed && r.oriented) {
     std::vector<std::vector<std::size_t>> by_component(r.components);
     for (std::size_t f = 0; f < r.faces; ++f) by_component[topo.face_component[f]].push_back(f);
-    std::vector<std::size_t> all(r.faces);
-    std::iota(all.begin(), all.end(), std::size_t(0));
-    r.volume_sign = enclosed_volume_sign(soup, all);
+    int sign = 0;  // of the last component
     for (const std::vector<std::size_t>& faces : by_component)
-      if (!faces.empty() && enclosed_volume_sign(soup, faces) < 0) ++r.inward_components;
+      if (!faces.empty() && (sign = enclosed_volume_sign(soup, faces)) < 0) ++r.inward_components;
+    if (by_component.size() == 1) {  // the whole is its one component
+      r.volume_sign = sign;
+    } else {
+      std::vector<std::size_t> all(r.faces);
+      std::iota(all.begin(), all.end(), std::size_t(0));
+      r.volume_sign = enclosed_volume_sign(soup, all);
+    }
   }
   r.seconds_shape = seconds_since(t0);
 }

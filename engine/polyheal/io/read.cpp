@@ -28,7 +28,6 @@ std::string beyond_range(std::string_view value) {
          "' is beyond +-1e150, the range within which polyheal's distances and tolerances are finite";
 }
 
-
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   return s;

@@ -53,11 +53,13 @@ class RawOffset {
       Vec u = sub(b, a), w = sub(c, a);
       const double m = std::max({std::fabs(u[0]), std::fabs(u[1]), std::fabs(u[2]), std::fabs(w[0]), std::fabs(w[1]),
                                  std::fabs(w[2])});
-      if (m > 0 && std::isfinite(m))
+      if (m > 0 && std::isfinite(m)) {
+        const int scale = -std::ilogb(m);
         for (int k = 0; k < 3; ++k) {
-          u[k] = std::ldexp(u[k], -std::ilogb(m));
-          w[k] = std::ldexp(w[k], -std::ilogb(m));
+          u[k] = std::ldexp(u[k], scale);
+          w[k] = std::ldexp(w[k], scale);
         }
+      }
       const Vec n = cross(u, w);
       if (!(norm(n) > 0) || !std::isfinite(norm(n)))
         throw UnsupportedInput("face " + std::to_string(f) +

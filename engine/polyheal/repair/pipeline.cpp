@@ -165,7 +165,7 @@ class Pipeline {
   /// moved no more than the limit and no input component was dropped.
   bool within_limit(State& s, const std::vector<std::array<Point3d, 3>>& fills) const {
     if (!s.within) {
-      const Assessment a = assess(input_, result_.input, s.soup, deviation_limit(), o_.for_tetgen, fills);
+      const Assessment a = assess(input_, result_.input, s.soup, deviation_limit(), o_.for_tetgen, fills, &s.report);
       s.within = a.within_deviation && a.dropped_components == 0;
     }
     return *s.within;
@@ -579,11 +579,15 @@ double max_deviation_of(const RepairOptions& o, double diagonal) {
 }
 
 Assessment assess(const Soup& input, const Report& in, const Soup& written, double max_deviation, bool for_tetgen,
-                  const std::vector<std::array<Point3d, 3>>& hole_fills) {
+                  const std::vector<std::array<Point3d, 3>>& hole_fills, const Report* written_report) {
   Assessment a;
-  InspectOptions io;
-  io.tetgen_segments = for_tetgen;
-  a.out = inspect(written, io);
+  if (written_report) {
+    a.out = *written_report;
+  } else {
+    InspectOptions io;
+    io.tetgen_segments = for_tetgen;
+    a.out = inspect(written, io);
+  }
   a.certified = certified(a.out, for_tetgen);
   a.components_in = in.components;
   a.components_out = a.out.components;

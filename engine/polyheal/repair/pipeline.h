@@ -154,8 +154,11 @@ struct Assessment {
 };
 
 /// `input_report`: inspect(input), which the caller has already made.
+/// `written_report`: inspect(written) with tetgen_segments = for_tetgen, if
+/// the caller has it (else it is made here).
 Assessment assess(const Soup& input, const Report& input_report, const Soup& written, double max_deviation,
                   bool for_tetgen,
-                  const std::vector<std::array<Point3d, 3>>& hole_fills = {});
+                  const std::vector<std::array<Point3d, 3>>& hole_fills = {},
+                  const Report* written_report = nullptr);
 
 }  // namespace polyheal
