@@ -91,6 +91,8 @@ nlohmann::json to_json(const CheckArgs& args, const Report& r, double read_s, do
        {{"signed_volume", r.signed_volume},
         {"volume_sign", r.volume_sign},
         {"inward_components", r.inward_components},
+        {"inside_out_components", r.nesting_checked ? json(r.inside_out_components) : json(nullptr)},
+        {"cavities", r.nesting_checked ? json(r.cavities) : json(nullptr)},
         {"bbox", {{"min", r.bbox_min}, {"max", r.bbox_max}}}}},
       {"seconds",
        {{"read", read_s},

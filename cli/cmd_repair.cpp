@@ -26,7 +26,7 @@ std::string joined(const std::vector<std::string>& parts) {
 
 struct RepairArgs : RepairFiles {
   std::string steps = "all", weld, t_junction, max_deviation = "1%", certificate, provenance, for_tool, smesh;
-  bool no_fill = false, drop_enclosed = false, no_tetgen_run = false;
+  bool no_fill = false, drop_enclosed = false, no_tetgen_run = false, keep_orientation = false;
   RepairOptions options;
 };
 
@@ -98,6 +98,7 @@ nlohmann::json parameters_json(const RepairArgs& a, const Outcome& o) {
           {"max_hole_edges", a.options.max_hole_edges},
           {"max_deviation", o.max_deviation},
           {"drop_enclosed", a.drop_enclosed},
+          {"orient_outward", a.options.orient_outward},
           {"for", a.for_tool.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.for_tool)}};
 }
 
@@ -166,7 +167,9 @@ void print_text(const RepairArgs& args, const Outcome& o) {
   std::printf("%s -> %s\n", args.input.c_str(), args.output.c_str());
   const std::string kinds = o.report.defect_kinds_in.empty() ? "" : " (" + joined(defect_phrases(o.report.defect_kinds_in)) + ")";
   std::printf("  input: %zu faces, %zu defects%s%s\n", o.report.faces_in, o.report.defects_in, kinds.c_str(),
-              o.report.clean_in ? " (certified clean: written unchanged)" : "");
+              !o.report.clean_in         ? ""
+              : o.report.stages.empty() ? " (certified clean: written unchanged)"
+                                        : " (certified clean)");
   for (const StageReport& s : o.report.stages) {
     std::printf("  %-11s %-8s %6.2f s  %zu faces, %zu defects", s.name.c_str(), s.accepted ? "kept" : "not kept",
                 s.seconds, s.faces_out, s.defects_after);
@@ -228,6 +231,7 @@ void run(RepairArgs& args, int& exit_code) {
   const Soup input = read_repair_input(args, progress, o.read_s);
   args.options.observer = &progress;
   args.options.fill_holes = !args.no_fill;
+  args.options.orient_outward = !args.keep_orientation;
   try {
     args.options.steps = parse_steps(args.steps);
   } catch (const std::invalid_argument& e) {
@@ -323,6 +327,9 @@ void add_repair(CLI::App& app, int& exit_code) {
       "  regularize   closed surfaces local repair could not finish: the union's boundary\n"
       "               (Jung, Shin & Choi); every output face lies on the input\n"
       "  rebuild      anything else: an overlay-grid volume within about a cell (Hu et al.)\n"
+      "  orient       a certified surface inside out (a component with negative volume, inside\n"
+      "               no other) is turned outwards with what lies inside it; cavities stay.\n"
+      "               Moves no vertex (--keep-orientation: off)\n"
       "The written file is read back and checked exactly; the report gives, stage by stage,\n"
       "what changed and the Hausdorff distance to the input.\n\n"
       "Exit 0: certified clean, within --max-deviation, no input component dropped;\n"
@@ -342,6 +349,8 @@ void add_repair(CLI::App& app, int& exit_code) {
   cmd->add_option("--max-deviation", args->max_deviation,
                   "exit 1 when the Hausdorff distance to the input exceeds D (model units, or P% of the diagonal)")
       ->default_str("1%");
+  cmd->add_flag("--keep-orientation", args->keep_orientation,
+                "do not turn inside-out components (negative volume, inside no other) outwards");
   cmd->add_flag("--drop-enclosed", args->drop_enclosed,
                 "accept dropping components that lie inside the output's volume (inner parts) with exit 0");
   cmd->add_option("--for", args->for_tool,

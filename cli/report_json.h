@@ -20,12 +20,29 @@ inline double peak_memory_mb() {
 
 /// A note on a closed, oriented surface whose faces point inwards, or ""
 /// (not a defect: a consistently oriented surface may mean a cavity, but a
-/// solid the wrong way out is wrong for most tools). Exact signs
-/// (Report::volume_sign, inward_components).
+/// solid the wrong way out is wrong for most tools). Exact signs and, on a
+/// certified surface, exact nesting (Report::volume_sign, inward_components,
+/// inside_out_components, cavities).
 inline std::string inward_note(const Report& r) {
-  if (!r.closed || !r.oriented) return "";
+  if (!r.closed || !r.oriented || r.inward_components == 0) return "";
+  auto count = [](std::size_t n, const char* one, const char* many) {
+    return std::to_string(n) + " " + (n == 1 ? one : many);
+  };
+  if (r.nesting_checked) {
+    std::string note;
+    if (r.inside_out_components)
+      note = (r.components == 1 ? std::string("the surface is inside out")
+                                : count(r.inside_out_components, "component", "components") + " of " +
+                                      std::to_string(r.components) + " inside out") +
+             " (negative volume, exact sign, inside no other component): " +
+             (r.inside_out_components == 1 ? "its faces point inwards; `polyheal repair` turns it outwards"
+                                           : "their faces point inwards; `polyheal repair` turns them outwards");
+    if (r.cavities)
+      note += (note.empty() ? "" : "; ") + count(r.cavities, "component faces", "components face") +
+              " inwards inside another: cavities";
+    return note;
+  }
   if (r.volume_sign < 0) return "the surface encloses negative volume (exact sign): its faces point inwards, inside out";
-  if (r.inward_components == 0) return "";
   return std::to_string(r.inward_components) + " of " + std::to_string(r.components) + " components enclose" +
          (r.inward_components == 1 ? "s" : "") +
          " negative volume (exact sign): a cavity if inside another component, else inside out";

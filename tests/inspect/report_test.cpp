@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "polyheal/inspect/nesting.h"
 #include "polyheal/inspect/report.h"
 #include "polyheal/io/write.h"
 #include "support/builders.h"
@@ -282,4 +283,104 @@ TEST_CASE("inspect: the sign of the enclosed volume, exactly, for the whole surf
   // open: not asked
   const Report open = inspect(test::soup({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 2, 1}}));
   CHECK(open.volume_sign == 0);
+}
+
+namespace {
+
+/// `s` with every face reversed.
+Soup reversed(Soup s) {
+  for (std::size_t f = 0; f < s.face_count(); ++f) std::swap(s.indices[3 * f + 1], s.indices[3 * f + 2]);
+  return s;
+}
+
+/// Per component of `n`, in the order of `parts`' first faces: turned?
+std::vector<int> turned_by_part(const Nesting& n, const std::vector<std::size_t>& first_faces) {
+  std::vector<int> t;
+  for (std::size_t f : first_faces) t.push_back(n.turned[n.face_component[f]]);
+  return t;
+}
+
+}  // namespace
+
+TEST_CASE("nesting: inside-out components are those with negative volume inside no other and cavities are left",
+          "[inspect]") {
+  const Soup outer = test::box({0, 0, 0}, {3, 3, 3}), inner = test::box({1, 1, 1}, {2, 2, 2});
+  SECTION("one box inside out") {
+    const Soup s = reversed(outer);
+    const Report r = inspect(s);
+    CHECK(r.nesting_checked);
+    CHECK(r.inside_out_components == 1);
+    const Nesting n = nesting(s);
+    CHECK(turned_by_part(n, {0}) == std::vector<int>{1});
+    const Report after = inspect(turned_outward(s, n));
+    CHECK(after.certified_clean());
+    CHECK(after.volume_sign == 1);
+    CHECK(after.inward_components == 0);
+    CHECK_FALSE(after.nesting_checked);  // nothing faces inwards: not asked
+  }
+  SECTION("a cavity: nothing to turn") {
+    const Soup s = test::concat(outer, reversed(inner));
+    const Report r = inspect(s);
+    CHECK(r.nesting_checked);
+    CHECK(r.inside_out_components == 0);
+    CHECK(r.cavities == 1);
+    CHECK(turned_by_part(nesting(s), {0, 12}) == std::vector<int>{0, 0});
+  }
+  SECTION("a hollow box inside out: both shells turn, the cavity comes back") {
+    const Soup s = test::concat(reversed(outer), inner);
+    const Nesting n = nesting(s);
+    CHECK(n.inside_out_count == 1);
+    CHECK(turned_by_part(n, {0, 12}) == std::vector<int>{1, 1});
+    const Report after = inspect(turned_outward(s, n));
+    CHECK(after.volume_sign == 1);
+    CHECK(after.cavities == 1);
+    CHECK(after.inside_out_components == 0);
+  }
+  SECTION("an inside-out shell around a cavity: the cavity is already one, only the shell turns") {
+    const Soup s = test::concat(reversed(outer), reversed(inner));
+    const Nesting n = nesting(s);
+    CHECK(n.inside_out_count == 1);
+    CHECK(n.cavity_count == 1);
+    CHECK(turned_by_part(n, {0, 12}) == std::vector<int>{1, 0});
+  }
+  SECTION("an island in a cavity of an inside-out solid: every depth faces its way") {
+    const Soup island = test::box({1.4, 1.4, 1.4}, {1.6, 1.6, 1.6});
+    const Soup s = test::concat(test::concat(reversed(outer), inner), reversed(island));
+    const Nesting n = nesting(s);
+    CHECK(turned_by_part(n, {0, 12, 24}) == std::vector<int>{1, 1, 1});
+    const Nesting after = nesting(turned_outward(s, n));
+    CHECK(after.volume_sign == std::vector<int>{1, -1, 1});
+  }
+  SECTION("an outward part inside a solid is left as it is (embedded, not a cavity gone wrong)") {
+    const Soup s = test::concat(outer, inner);
+    const Report r = inspect(s);
+    CHECK(r.inward_components == 0);
+    CHECK(r.inside_out_components == 0);
+    CHECK(turned_by_part(nesting(s), {0, 12}) == std::vector<int>{0, 0});
+  }
+  SECTION("inside the bounding box is not inside: the exact test decides") {
+    // A tetrahedron x, y, z >= 0, x + y + z <= 10; two inward boxes within
+    // its bounding box, one inside it (a cavity), one beyond its slanted face.
+    Soup tet = test::tetrahedron();
+    for (Point3d& p : tet.points)
+      for (double& x : p) x *= 10;
+    const Soup cavity = reversed(test::box({1, 1, 1}, {2, 2, 2})), beyond = reversed(test::box({6, 6, 6}, {7, 7, 7}));
+    const Soup s = test::concat(test::concat(tet, cavity), beyond);
+    const Report r = inspect(s);
+    REQUIRE(r.certified_clean());
+    CHECK(r.inward_components == 2);
+    CHECK(r.inside_out_components == 1);
+    CHECK(r.cavities == 1);
+    CHECK(turned_by_part(nesting(s), {0, 4, 16}) == std::vector<int>{0, 0, 1});
+  }
+  SECTION("self-intersecting: nesting is undefined, not asked") {
+    const Soup s = test::concat(reversed(outer), reversed(test::box({2, 2, 2}, {4, 4, 4})));
+    const Report r = inspect(s);
+    REQUIRE(r.closed);
+    REQUIRE(r.oriented);
+    CHECK(r.inward_components == 2);
+    CHECK_FALSE(r.self_intersections.empty());
+    CHECK_FALSE(r.nesting_checked);
+    CHECK(r.inside_out_components == 0);
+  }
 }

@@ -268,3 +268,49 @@ TEST_CASE("repair: where local moves leave the surface beyond --max-deviation, a
   CHECK(m.components_out == 2);
   CHECK_FALSE(m.within_deviation);
 }
+
+TEST_CASE("repair: an inside-out surface is turned outwards moving nothing (--keep-orientation keeps it)",
+          "[pipeline]") {
+  Soup in = read_soup(test::fixture("torus.off"));
+  for (std::size_t f = 0; f < in.face_count(); ++f)
+    std::reverse(in.indices.begin() + std::ptrdiff_t(in.offsets[f]) + 1,
+                 in.indices.begin() + std::ptrdiff_t(in.offsets[f + 1]));
+  REQUIRE(inspect(in).certified_clean());
+  REQUIRE(inspect(in).inside_out_components == 1);
+  {
+    const RepairResult r = repair(in);
+    CHECK(r.report.clean_in);
+    CHECK(ran(r.report, "orient", true));
+    const Assessment a = written(in, r, "pipe_torus_inside_out.off", 1e-9);
+    CHECK(a.certified);
+    CHECK(a.out.volume_sign == 1);
+    CHECK(a.out.inward_components == 0);
+    CHECK(a.hausdorff == 0);
+    CHECK(a.faces_kept == in.face_count());  // the same faces, the other way round
+  }
+  {
+    RepairOptions keep;
+    keep.orient_outward = false;
+    const RepairResult r = repair(in, keep);
+    CHECK(r.report.stages.empty());
+    CHECK(inspect(r.soup).volume_sign == -1);
+  }
+}
+
+TEST_CASE("repair: an inside-out box with a hole is filled then turned outwards and its cavity stays a cavity",
+          "[pipeline]") {
+  Soup in = test::concat(test::box({0, 0, 0}, {3, 3, 3}, true), test::box({1, 1, 1}, {2, 2, 2}));
+  Soup holed;
+  holed.points = in.points;
+  for (std::size_t f = 1; f < in.face_count(); ++f)  // face 0 of the shell missing
+    holed.add_triangle(in.indices[3 * f], in.indices[3 * f + 1], in.indices[3 * f + 2]);
+  REQUIRE_FALSE(inspect(holed).closed);
+  const RepairResult r = repair(holed);
+  CHECK(ran(r.report, "clean", true));
+  CHECK(ran(r.report, "orient", true));
+  const Assessment a = written(holed, r, "pipe_hollow_inside_out.off", 0.01 * r.report.diagonal);
+  CHECK(a.certified);
+  CHECK(a.out.volume_sign == 1);
+  CHECK(a.out.inside_out_components == 0);
+  CHECK(a.out.cavities == 1);  // the inner box: it faced outwards with the inside-out shell
+}

@@ -11,6 +11,7 @@
 #include <set>
 
 #include "polyheal/inspect/detail/parallel.h"
+#include "polyheal/inspect/nesting.h"
 #include "polyheal/inspect/predicates.h"
 #include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/weld.h"
@@ -71,6 +72,12 @@ Report inspect(const Soup& input, const InspectOptions& o) {
     self_intersection_pass();
   }
   count_cracks(soup, o, r);
+  if (r.inward_components > 0 && r.certified_clean()) {
+    const Nesting n = nesting(soup);
+    r.nesting_checked = true;
+    r.inside_out_components = n.inside_out_count;
+    r.cavities = n.cavity_count;
+  }
   return r;
 }
 

@@ -95,6 +95,10 @@ struct Report {
   // inwards: a cavity if inside another component, else inside out).
   int volume_sign = 0;
   std::size_t inward_components = 0;
+  // Certified clean with inward components only (inspect/nesting.h, exact):
+  // of those, inside no other component (inside out) or inside one (cavities).
+  bool nesting_checked = false;
+  std::size_t inside_out_components = 0, cavities = 0;
   std::array<double, 3> bbox_min{}, bbox_max{};
   // time per stage, seconds
   double seconds_topology = 0, seconds_shape = 0, seconds_self_intersections = 0;

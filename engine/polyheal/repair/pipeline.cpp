@@ -10,6 +10,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "polyheal/inspect/nesting.h"
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/weld.h"
@@ -95,8 +96,9 @@ class Pipeline {
     r.diagonal = bbox_diagonal(cur_.report);
     result_.input = cur_.report;
     if (done()) {
+      orient_outward();
       r.clean_in = true;
-      result_.soup = input_;
+      result_.soup = std::move(cur_.soup);
       r.seconds = seconds_since(t0);
       return std::move(result_);
     }
@@ -131,6 +133,7 @@ class Pipeline {
         if (tetgen_pass_due()) tetgen_pass(cell);
       }
     }
+    orient_outward();
     result_.soup = std::move(cur_.soup);
     r.seconds = seconds_since(t0);
     return std::move(result_);
@@ -235,6 +238,49 @@ class Pipeline {
     s.seconds = seconds_since(t0);
     result_.report.stages.push_back(std::move(s));
     return result_.report.stages.back();
+  }
+
+  /// A certified surface with components inside out (negative volume,
+  /// inside no other component; inspect/nesting.h) has them turned
+  /// outwards, with the components inside them: cavities stay cavities.
+  /// Moves nothing; a stage only when it turns something.
+  void orient_outward() {
+    if (!o_.orient_outward || !cur_.report.certified_clean() || cur_.report.inside_out_components == 0) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    const Nesting n = nesting(cur_.soup);
+    if (n.inside_out_count == 0) return;
+    if (o_.observer) o_.observer->stage("orient");
+    StageReport s;
+    s.name = "orient";
+    std::size_t faces = 0, components = 0;
+    for (char t : n.turned) components += t != 0;
+    State next;
+    next.soup = turned_outward(cur_.soup, n, &faces);
+    // Turning faces changes no position, edge or intersection: the checks
+    // are made again for the shape fields (and the caller checks the
+    // written file anyway); TetGen's verdict does not depend on orientation.
+    InspectOptions io;
+    io.tetgen_segments = o_.for_tetgen;
+    next.report = inspect(next.soup, io);
+    next.report.tetgen_refused = cur_.report.tetgen_refused;
+    next.defects = defect_count(next.report, o_.for_tetgen);
+    next.hausdorff = cur_.hausdorff;
+    next.within = cur_.within;
+    s.accepted = true;
+    s.faces_out = next.soup.face_count();
+    s.defects_after = next.defects;
+    s.hausdorff = next.hausdorff;
+    s.max_displacement = 0;
+    s.counts = {{"inside_out_components", double(n.inside_out_count)},
+                {"components_turned", double(components)},
+                {"faces_turned", double(faces)}};
+    s.outcome = std::to_string(n.inside_out_count) + " component" + (n.inside_out_count == 1 ? "" : "s") +
+                " inside out (negative volume, inside no other): " + std::to_string(components) +
+                " component" + (components == 1 ? "" : "s") + " (" + std::to_string(faces) +
+                " faces) turned, so that the surface bounds a volume";
+    cur_ = std::move(next);
+    s.seconds = seconds_since(t0);
+    result_.report.stages.push_back(std::move(s));
   }
 
   void clean() {

@@ -17,6 +17,9 @@
 //                  output triangle lies on the input surface.
 //   5. rebuild     the last resort for anything else (Hu et al., rebuild.h):
 //                  an overlay-grid volume around the input, within a cell.
+//   6. orient      a certified surface whose outermost components face
+//                  inwards (inside out, inspect/nesting.h) has them turned
+//                  outwards, with the components inside them. Moves nothing.
 // With for_tetgen, a clean surface that TetGen's tolerances would still stop
 // (nearly degenerate faces, sharp folds) goes through the degenerate engine
 // at 179.9/0.1 degrees with folds counted as bad, before the rebuild and
@@ -69,6 +72,10 @@ struct RepairOptions {
   /// surface farther, a certified union within it is kept instead.
   double max_deviation = 0;
   double max_deviation_ratio = 0.01;
+  /// Turn components that are inside out (inspect/nesting.h) outwards, with
+  /// what lies inside them, once the surface is certified (false: keep the
+  /// orientation; the CLI's --keep-orientation).
+  bool orient_outward = true;
   /// With for_tetgen: TetGen itself, run on each surface our checks call
   /// TetGen-ready (the CLI runs `tetgen -pQ` when installed); false marks
   /// it refused (Report::tetgen_refused), a defect the later stages work on
@@ -92,7 +99,7 @@ struct StageReport {
 struct RepairReport {
   std::size_t faces_in = 0, defects_in = 0;
   std::vector<std::pair<std::string, std::size_t>> defect_kinds_in;  // defect_kinds() of the input
-  bool clean_in = false;           // the input was certified already: written unchanged
+  bool clean_in = false;           // the input was certified already: written unchanged (but for an orient stage)
   double diagonal = 0;
   std::vector<StageReport> stages;
   double seconds = 0;

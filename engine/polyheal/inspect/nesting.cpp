@@ -1,0 +1,147 @@
+#include "polyheal/inspect/nesting.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Side_of_triangle_mesh.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <algorithm>
+#include <array>
+#include <limits>
+#include <memory>
+#include <unordered_map>
+
+#include "polyheal/inspect/predicates.h"
+#include "polyheal/mesh/topology.h"
+#include "polyheal/mesh/weld.h"
+
+namespace polyheal {
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Mesh = CGAL::Surface_mesh<K::Point_3>;
+using Side = CGAL::Side_of_triangle_mesh<Mesh, K>;
+
+struct Box {
+  std::array<double, 3> lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                           std::numeric_limits<double>::infinity()};
+  std::array<double, 3> hi{-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                           -std::numeric_limits<double>::infinity()};
+  bool within(const Box& o) const {
+    for (int k = 0; k < 3; ++k)
+      if (lo[k] < o.lo[k] || hi[k] > o.hi[k]) return false;
+    return true;
+  }
+};
+
+/// One component as a Surface_mesh with its point-in-volume test, built on
+/// first use.
+struct Solid {
+  Mesh mesh;
+  std::unique_ptr<Side> side;
+};
+
+}  // namespace
+
+Nesting nesting(const Soup& soup) {
+  Nesting n;
+  const Soup welded = apply_weld(soup, weld_identical_points(soup.points));
+  const Topology t = analyze_topology(welded);
+  n.components = t.components;
+  n.face_component = t.face_component;
+  std::vector<std::vector<std::size_t>> faces(n.components);
+  for (std::size_t f = 0; f < welded.face_count(); ++f) faces[t.face_component[f]].push_back(f);
+  std::vector<Box> box(n.components);
+  std::vector<Index> some_vertex(n.components, 0);
+  n.volume_sign.assign(n.components, 0);
+  for (std::size_t c = 0; c < n.components; ++c) {
+    n.volume_sign[c] = enclosed_volume_sign(welded, faces[c]);
+    for (std::size_t f : faces[c])
+      for (Index i : welded.face(f))
+        for (int k = 0; k < 3; ++k) {
+          box[c].lo[k] = std::min(box[c].lo[k], welded.points[i][k]);
+          box[c].hi[k] = std::max(box[c].hi[k], welded.points[i][k]);
+        }
+    some_vertex[c] = welded.face(faces[c].front())[0];
+  }
+  n.inside_out.assign(n.components, 0);
+  n.turned.assign(n.components, 0);
+  const bool any_inward = std::any_of(n.volume_sign.begin(), n.volume_sign.end(), [](int s) { return s < 0; });
+  if (!any_inward) return n;
+
+  std::vector<Solid> solids(n.components);
+  auto solid = [&](std::size_t d) -> const Side& {
+    Solid& s = solids[d];
+    if (!s.side) {
+      std::unordered_map<Index, Mesh::Vertex_index> local;
+      for (std::size_t f : faces[d]) {
+        std::array<Mesh::Vertex_index, 3> v;
+        const FaceView fv = welded.face(f);
+        for (int k = 0; k < 3; ++k) {
+          auto [it, fresh] = local.try_emplace(fv[k]);
+          if (fresh) {
+            const Point3d& p = welded.points[fv[k]];
+            it->second = s.mesh.add_vertex(K::Point_3(p[0], p[1], p[2]));
+          }
+          v[k] = it->second;
+        }
+        s.mesh.add_face(v[0], v[1], v[2]);
+      }
+      s.side = std::make_unique<Side>(s.mesh);
+    }
+    return *s.side;
+  };
+  // c inside d: disjoint closed surfaces, so one vertex of c decides (it is
+  // never on d's boundary; were it, c would touch d and not be certified).
+  auto inside = [&](std::size_t c, std::size_t d) {
+    if (c == d || !box[c].within(box[d])) return false;
+    const Point3d& p = welded.points[some_vertex[c]];
+    return solid(d)(K::Point_3(p[0], p[1], p[2])) == CGAL::ON_BOUNDED_SIDE;
+  };
+  for (std::size_t c = 0; c < n.components; ++c) {
+    if (n.volume_sign[c] >= 0) continue;
+    bool enclosed = false;
+    for (std::size_t d = 0; d < n.components && !enclosed; ++d) enclosed = inside(c, d);
+    if (enclosed) {
+      ++n.cavity_count;
+    } else {
+      n.inside_out[c] = n.turned[c] = 1;
+      ++n.inside_out_count;
+    }
+  }
+  // Inside an inside-out component, each component is turned to face as its
+  // depth says once that one faces outwards: outwards at even depth (an
+  // island), inwards at odd depth (a cavity). Elsewhere nothing is turned.
+  if (!n.inside_out_count) return n;
+  for (std::size_t c = 0; c < n.components; ++c) {
+    if (n.inside_out[c]) continue;
+    bool under = false;
+    for (std::size_t d = 0; d < n.components && !under; ++d) under = n.inside_out[d] && inside(c, d);
+    if (!under) continue;
+    std::size_t depth = 0;
+    for (std::size_t d = 0; d < n.components; ++d) depth += inside(c, d);
+    n.turned[c] = (n.volume_sign[c] > 0) != (depth % 2 == 0);
+  }
+  return n;
+}
+
+Soup turned_outward(const Soup& soup, const Nesting& n, std::size_t* faces_turned) {
+  Soup out;
+  out.points = soup.points;
+  out.group_names = soup.group_names;
+  out.face_group = soup.face_group;
+  std::size_t turned = 0;
+  std::vector<Index> face;
+  for (std::size_t f = 0; f < soup.face_count(); ++f) {
+    const FaceView v = soup.face(f);
+    face.assign(v.begin(), v.end());
+    if (n.turned[n.face_component[f]]) {
+      std::reverse(face.begin() + 1, face.end());  // same first corner, the other way round
+      ++turned;
+    }
+    out.add_face(face.begin(), face.end());
+  }
+  if (faces_turned) *faces_turned = turned;
+  return out;
+}
+
+}  // namespace polyheal

@@ -1,0 +1,48 @@
+// polyheal — how the components of a closed surface nest, and which of them
+// face the wrong way (exact).
+//
+// A closed, oriented 2-manifold without self-intersection bounds a volume
+// when every component not inside another faces outwards: a component that
+// encloses negative volume inside another is a cavity (or, inside a cavity,
+// an island facing the cavity's way), but one inside no other encloses
+// "everything outside it", which no tool means — the file is inside out.
+// Nesting is decided by CGAL's Side_of_triangle_mesh (ray parity, Epick
+// predicates: exact on the double coordinates), volume signs by
+// enclosed_volume_sign (exact). No CGAL in this header.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "polyheal/mesh/soup.h"
+
+namespace polyheal {
+
+struct Nesting {
+  std::size_t components = 0;
+  std::vector<std::size_t> face_component;  // faces connected through shared (welded) edges
+  std::vector<int> volume_sign;             // per component, exact
+  /// Per component: encloses negative volume and lies inside no other.
+  std::vector<char> inside_out;
+  /// Per component: to be turned so that the surface bounds a volume.
+  /// inside_out, and inside such a component every one that faces against
+  /// its depth (islands outwards at even depth, cavities inwards at odd
+  /// depth; an inside-out file's cavities faced outwards). Components
+  /// inside no inside-out one are left as they are: an outward part inside
+  /// a solid may be an embedded part, not a cavity gone wrong.
+  std::vector<char> turned;
+  std::size_t inside_out_count = 0;
+  std::size_t cavity_count = 0;  // negative volume, inside another component
+};
+
+/// Precondition: `soup` is closed, 2-manifold, consistently oriented and has
+/// no self-intersection (Report::certified_clean()); otherwise nesting is
+/// undefined and the result meaningless. Containment is tested only where
+/// it matters (a component with negative volume), after a bounding-box test.
+Nesting nesting(const Soup& soup);
+
+/// `soup` with the faces of every `turned` component reversed (points and
+/// face groups kept): a surface that bounds a volume with its faces outwards.
+Soup turned_outward(const Soup& soup, const Nesting& n, std::size_t* faces_turned = nullptr);
+
+}  // namespace polyheal
