@@ -34,18 +34,23 @@ std::uint64_t edge_key(Index a, Index b) {
   return (std::uint64_t(a) << 32) | b;
 }
 
-/// Sign of the volume a closed triangle set encloses, exactly (the input
-/// coordinates are doubles; the sum of determinants is rational).
+/// Sign of the volume a closed triangle set encloses, exactly
+/// (enclosed_volume_sign: intervals, then rationals) — over
+/// orient_polygon_soup's points, which renumber the input's.
 int volume_sign(const std::vector<P3>& pts, const std::vector<std::vector<std::size_t>>& polys,
                 const std::vector<std::size_t>& faces) {
-  CGAL::Exact_rational v = 0;
+  Soup s;
+  std::vector<std::size_t> all;
   for (std::size_t f : faces) {
-    const P3 &a = pts[polys[f][0]], &b = pts[polys[f][1]], &c = pts[polys[f][2]];
-    const CGAL::Exact_rational ax = a.x(), ay = a.y(), az = a.z(), bx = b.x(), by = b.y(), bz = b.z(), cx = c.x(),
-                               cy = c.y(), cz = c.z();
-    v += ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
+    const Index first = Index(s.points.size());
+    for (int k = 0; k < 3; ++k) {
+      const P3& p = pts[polys[f][k]];
+      s.points.push_back({p.x(), p.y(), p.z()});
+    }
+    all.push_back(s.face_count());
+    s.add_triangle(first, first + 1, first + 2);
   }
-  return CGAL::sign(v);
+  return enclosed_volume_sign(s, all);
 }
 
 /// Whether polygon p runs through triangle t's corners in t's order;
