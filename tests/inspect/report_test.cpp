@@ -287,12 +287,6 @@ TEST_CASE("inspect: the sign of the enclosed volume, exactly, for the whole surf
 
 namespace {
 
-/// `s` with every face reversed.
-Soup reversed(Soup s) {
-  for (std::size_t f = 0; f < s.face_count(); ++f) std::swap(s.indices[3 * f + 1], s.indices[3 * f + 2]);
-  return s;
-}
-
 /// Per component of `n`, in the order of `parts`' first faces: turned?
 std::vector<int> turned_by_part(const Nesting& n, const std::vector<std::size_t>& first_faces) {
   std::vector<int> t;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "polyheal/inspect/nesting.h"
 #include "polyheal/inspect/report.h"
 #include "polyheal/io/read.h"
 #include "polyheal/io/write.h"
@@ -313,4 +314,26 @@ TEST_CASE("repair: an inside-out box with a hole is filled then turned outwards 
   CHECK(a.out.volume_sign == 1);
   CHECK(a.out.inside_out_components == 0);
   CHECK(a.out.cavities == 1);  // the inner box: it faced outwards with the inside-out shell
+}
+
+TEST_CASE("repair: overlapping boxes inside out are united turned outwards (their union as given is empty)",
+          "[pipeline]") {
+  const Soup in = reversed(test::concat(test::box({0, 0, 0}, {2, 2, 2}), test::box({1, 1, 1}, {3, 3, 3})));
+  REQUIRE(inspect(in).volume_sign == -1);
+  REQUIRE_FALSE(inspect(in).self_intersections.empty());
+  const RepairResult r = repair(in);
+  CHECK(ran(r.report, "regularize (turned outwards)", true));
+  CHECK_FALSE(ran(r.report, "rebuild", true));
+  const Assessment a = written(in, r, "pipe_boxes_inside_out.off", 0.01 * r.report.diagonal);
+  CHECK(a.certified);
+  CHECK(a.within_deviation);
+  CHECK(a.out.volume_sign == 1);
+  CHECK(a.out.components == 1);
+  CHECK(a.faces_kept == 12);  // the faces outside the other box, as they were (the other way round)
+  // --keep-orientation: the union as given is empty, and the grid is the fallback
+  RepairOptions keep;
+  keep.orient_outward = false;
+  const RepairResult k = repair(in, keep);
+  CHECK_FALSE(ran(k.report, "regularize (turned outwards)", true));
+  CHECK_FALSE(ran(k.report, "regularize", true));
 }

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <unordered_map>
@@ -124,7 +125,9 @@ Nesting nesting(const Soup& soup) {
   return n;
 }
 
-Soup turned_outward(const Soup& soup, const Nesting& n, std::size_t* faces_turned) {
+namespace {
+
+Soup reversed_where(const Soup& soup, const std::function<bool(std::size_t)>& turn, std::size_t* faces_turned) {
   Soup out;
   out.points = soup.points;
   out.group_names = soup.group_names;
@@ -134,7 +137,7 @@ Soup turned_outward(const Soup& soup, const Nesting& n, std::size_t* faces_turne
   for (std::size_t f = 0; f < soup.face_count(); ++f) {
     const FaceView v = soup.face(f);
     face.assign(v.begin(), v.end());
-    if (n.turned[n.face_component[f]]) {
+    if (turn(f)) {
       std::reverse(face.begin() + 1, face.end());  // same first corner, the other way round
       ++turned;
     }
@@ -142,6 +145,16 @@ Soup turned_outward(const Soup& soup, const Nesting& n, std::size_t* faces_turne
   }
   if (faces_turned) *faces_turned = turned;
   return out;
+}
+
+}  // namespace
+
+Soup reversed(const Soup& soup) {
+  return reversed_where(soup, [](std::size_t) { return true; }, nullptr);
+}
+
+Soup turned_outward(const Soup& soup, const Nesting& n, std::size_t* faces_turned) {
+  return reversed_where(soup, [&](std::size_t f) { return n.turned[n.face_component[f]] != 0; }, faces_turned);
 }
 
 }  // namespace polyheal

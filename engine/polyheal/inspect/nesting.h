@@ -41,6 +41,9 @@ struct Nesting {
 /// it matters (a component with negative volume), after a bounding-box test.
 Nesting nesting(const Soup& soup);
 
+/// `soup` with every face reversed (the same first corner, the other way round).
+Soup reversed(const Soup& soup);
+
 /// `soup` with the faces of every `turned` component reversed (points and
 /// face groups kept): a surface that bounds a volume with its faces outwards.
 Soup turned_outward(const Soup& soup, const Nesting& n, std::size_t* faces_turned = nullptr);

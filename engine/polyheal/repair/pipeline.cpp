@@ -9,8 +9,10 @@
 #include <stdexcept>
 #include <unordered_map>
 #include <unordered_set>
+#include <numeric>
 
 #include "polyheal/inspect/nesting.h"
+#include "polyheal/inspect/predicates.h"
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/weld.h"
@@ -446,11 +448,18 @@ class Pipeline {
   }
 
   void regularize(const Soup& from, const char* name) {
-    stage(name, [&](StageReport& s) {
+    // A closed surface that encloses negative volume (exact sign) is inside
+    // out whatever its overlaps: its union is empty (winding numbers <= 0),
+    // and the union of the surface turned outwards is what it stands for.
+    std::vector<std::size_t> all(from.face_count());
+    std::iota(all.begin(), all.end(), std::size_t(0));
+    const bool turn = o_.orient_outward && enclosed_volume_sign(from, all) < 0;
+    const std::string title = turn ? std::string(name) + " (turned outwards)" : std::string(name);
+    stage(title.c_str(), [&](StageReport& s) {
       RegularizeOptions ro;
       ro.certify = false;
       ro.observer = o_.observer;
-      RegularizeResult res = polyheal::regularize(from, ro);
+      RegularizeResult res = polyheal::regularize(turn ? reversed(from) : from, ro);
       const RegularizeReport& r = res.report;
       s.counts = {{"intersecting_pairs_in", double(r.intersecting_pairs_in)},
                   {"triangles_split", double(r.triangles_split)},
@@ -459,6 +468,7 @@ class Pipeline {
       s.outcome = std::to_string(r.intersecting_pairs_in) + " intersecting pairs; " +
                   std::to_string(r.triangles_split) + " triangles split, " + std::to_string(r.invalid) +
                   " inside the union removed, " + std::to_string(r.components_removed) + " components enclosed";
+      if (turn) s.outcome = "the surface encloses negative volume (inside out): its union turned outwards; " + s.outcome;
       return std::move(res.soup);
     });
   }
