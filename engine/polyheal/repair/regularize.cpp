@@ -1397,34 +1397,92 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
 
 namespace {
 
-/// An upper bound on the squared distance from p to triangle c, tight to
-/// the double: interval arithmetic first (no rounding error can hide in it),
-/// the exact value only when an interval comparison inside the distance
-/// computation cannot be decided (p on an edge's line, say).
-template <class Exact>
-double squared_distance_upper(const Point3d& p, const std::array<Point3d, 3>& c, Exact e) {
-  using IA = CGAL::Simple_cartesian<CGAL::Interval_nt<false>>;
-  {
-    CGAL::Protect_FPU_rounding<true> protect;
-    try {
-      auto ia = [](const Point3d& q) { return IA::Point_3(q[0], q[1], q[2]); };
-      return CGAL::squared_distance(ia(p), IA::Triangle_3(ia(c[0]), ia(c[1]), ia(c[2]))).sup();
-    } catch (const CGAL::Uncertain_conversion_exception&) {
-    }
+/// The point of triangle abc nearest to p, in doubles, as (v, w) with
+/// q = a + v (b - a) + w (c - a) (Ericson, Real-Time Collision Detection
+/// §5.1.5), then made a point of the triangle exactly: v, w >= 0 and
+/// v + w <= 1 in real arithmetic on the returned doubles.
+std::array<double, 2> nearest_parameters(const Point3d& p, const std::array<Point3d, 3>& c) {
+  auto sub = [](const Point3d& x, const Point3d& y) { return Point3d{x[0] - y[0], x[1] - y[1], x[2] - y[2]}; };
+  auto dot = [](const Point3d& x, const Point3d& y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
+  const Point3d ab = sub(c[1], c[0]), ac = sub(c[2], c[0]), ap = sub(p, c[0]);
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  std::array<double, 2> vw{0, 0};
+  if (d1 <= 0 && d2 <= 0) return vw;  // vertex a
+  const Point3d bp = sub(p, c[1]);
+  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+  const Point3d cp = sub(p, c[2]);
+  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+  const double va = d3 * d6 - d5 * d4, vb = d5 * d2 - d1 * d6, vc = d1 * d4 - d3 * d2;
+  if (d3 >= 0 && d4 <= d3) vw = {1, 0};                                      // vertex b
+  else if (d6 >= 0 && d5 <= d6) vw = {0, 1};                                 // vertex c
+  else if (vc <= 0 && d1 >= 0 && d3 <= 0) vw = {d1 / (d1 - d3), 0};          // edge ab
+  else if (vb <= 0 && d2 >= 0 && d6 <= 0) vw = {0, d2 / (d2 - d6)};          // edge ac
+  else if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {                        // edge bc
+    const double t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    vw = {1 - t, t};
+  } else {
+    const double denom = 1 / (va + vb + vc);
+    vw = {vb * denom, vc * denom};
   }
-  return CGAL::to_interval(CGAL::squared_distance(e(p), K::Triangle_3(e(c[0]), e(c[1]), e(c[2])))).second;
+  double& v = vw[0];
+  double& w = vw[1];
+  if (!(v >= 0)) v = 0;  // also NaN, from a degenerate triangle
+  if (!(w >= 0)) w = 0;
+  if (v >= 1) return {1, 0};
+  // fl(1 - v) is within half a spacing of 1 - v: the double below it is not above
+  if (w > 0 && !(w < std::nextafter(1 - v, 0.0))) w = std::nextafter(1 - v, 0.0);
+  if (w < 0) w = 0;
+  return vw;
+}
+
+/// An upper bound on the squared distance from p to triangle c, tight to
+/// the double: interval arithmetic (no rounding error can hide in it) on
+/// CGAL's distance; where one of its comparisons cannot be decided (p on an
+/// edge's line, say), the distance to a point of the triangle — the one
+/// nearest_parameters() picks, enclosed in intervals — which bounds it.
+double squared_distance_upper(const Point3d& p, const std::array<Point3d, 3>& c) {
+  using IA = CGAL::Simple_cartesian<CGAL::Interval_nt<false>>;
+  CGAL::Protect_FPU_rounding<true> protect;
+  auto ia = [](const Point3d& q) { return IA::Point_3(q[0], q[1], q[2]); };
+  try {
+    return CGAL::squared_distance(ia(p), IA::Triangle_3(ia(c[0]), ia(c[1]), ia(c[2]))).sup();
+  } catch (const CGAL::Uncertain_conversion_exception&) {
+  }
+  using I = CGAL::Interval_nt<false>;
+  // |p - q|^2 enclosed, q = c[i] + v (c[j] - c[i]) + w (c[k] - c[i])
+  auto bound = [&](int i, int j, int k, double v, double w) {
+    I d2 = 0;
+    for (int x = 0; x < 3; ++x) {
+      const I a = c[i][x];
+      const I d = I(p[x]) - (a + I(v) * (I(c[j][x]) - a) + I(w) * (I(c[k][x]) - a));
+      d2 += d * d;
+    }
+    return d2.sup();
+  };
+  const std::array<double, 2> vw = nearest_parameters(p, c);
+  double best = bound(0, 1, 2, vw[0], vw[1]);
+  // On a sliver the plane's parameters are ill-conditioned; an edge's are
+  // not: the nearest point of each edge is a witness too.
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3;
+    const Point3d e{c[j][0] - c[i][0], c[j][1] - c[i][1], c[j][2] - c[i][2]};
+    const double along = (p[0] - c[i][0]) * e[0] + (p[1] - c[i][1]) * e[1] + (p[2] - c[i][2]) * e[2];
+    const double t = along / (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+    best = std::min(best, bound(i, j, j, t > 0 ? (t < 1 ? t : 1.0) : 0.0, 0.0));
+  }
+  return best;
 }
 
 /// Output -> input: each output triangle lies in the input triangle it came
 /// from up to rounding; the distance to one triangle is convex, so its
-/// corners bound it. Computed exactly (doubles lose the rounding error in
-/// cancellation on slivers far from the origin), for the corners that are
-/// not the source triangle's own. 0 without a source for every face.
+/// corners bound it. Bounded in interval arithmetic (doubles lose the
+/// rounding error in cancellation on slivers far from the origin;
+/// squared_distance_upper), for the corners that are not the source
+/// triangle's own. 0 without a source for every face.
 double max_distance_to_sources(const Soup& input, const Soup& written, const std::vector<std::size_t>& source_face,
                                double bbox_diagonal) {
   if (source_face.size() == written.face_count()) {
     double worst = 0;
-    auto e = [](const Point3d& q) { return EPoint(q[0], q[1], q[2]); };
     // Candidate sources of a face: its own and its edge neighbours' (a swap
     // in the rounding repair re-connects two faces across their sources).
     std::vector<std::pair<std::uint64_t, Index>> edges;
@@ -1447,7 +1505,7 @@ double max_distance_to_sources(const Soup& input, const Soup& written, const std
         for (Index v : written.face(f)) {
           const Point3d& p = written.points[v];
           if (p == c[0] || p == c[1] || p == c[2]) continue;
-          m = std::max(m, squared_distance_upper(p, c, e));
+          m = std::max(m, squared_distance_upper(p, c));
         }
         if (!best || m < *best) best = m;
       }
