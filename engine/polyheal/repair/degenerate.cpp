@@ -271,11 +271,20 @@ class Pipeline {
       const Point p = nearest_double_point(mesh_.point(mesh_.source(longest)));
       const Point q = nearest_double_point(mesh_.point(mesh_.target(longest)));
       if (p == q) continue;
-      const int pieces = strip ? needle_pieces(needle, p, q) : 2;
-      // the plane perpendicular to pq through p + i/pieces (q - p), at its nearest doubles
-      auto plane_at = [&](int i) {
-        return Kernel::Plane_3(nearest_double_point(p + (q - p) * (Kernel::FT(i) / Kernel::FT(pieces))), q - p);
-      };
+      // Where along pq the planes cut: i / pieces for a strip's side, the
+      // midpoint for a needle, and two points for a flat needle (below).
+      std::vector<Kernel::FT> at;
+      if (strip) {
+        const int pieces = needle_pieces(needle, p, q);
+        for (int i = 1; i < pieces; ++i) at.push_back(Kernel::FT(i) / Kernel::FT(pieces));
+      } else if (const auto t = pick == 0 ? flat_cut(needle, longest) : std::nullopt) {
+        at = {Kernel::FT((*t)[0]), Kernel::FT((*t)[1])};
+      } else {
+        at = {Kernel::FT(0.5)};
+      }
+      const int pieces = int(at.size()) + 1;
+      // the plane perpendicular to pq through p + at[i - 1] (q - p), at its nearest doubles
+      auto plane_at = [&](int i) { return Kernel::Plane_3(nearest_double_point(p + (q - p) * at[i - 1]), q - p); };
       detail::SliceResult all;
       face_descriptor seed = needle;
       int cuts = 0;
@@ -605,6 +614,36 @@ class Pipeline {
     const double k = std::ceil(length * length * std::tan(1.1 * o_.needle_angle * kPi / 180.0) /
                                twice_area);
     return k > 8 || !(k >= 2) ? 2 : static_cast<int>(k);
+  }
+
+  /// A flat needle — its apex so near its longest edge that the angles at
+  /// both ends of that edge are below the needle angle (a triangle almost a
+  /// cap: the paper's cap slice through the apex leaves both halves
+  /// needles) — is cut at two points of that edge, one each side of the
+  /// apex's foot at the distance that leaves the middle piece's base angles
+  /// at 1.2 needle angles: the end pieces keep one tiny angle each, at the
+  /// edge's ends, which flips with the faces beyond those ends clear. On
+  /// tube_edge2.42's end rings (chords 2.39 long, apexes 0.055 from them)
+  /// halving cuts left 476 faces where 416 are possible. Returns the two
+  /// edge parameters; nullopt when not flat, or too flat for two cuts (one
+  /// would fall within 5% of an end). Placement only, in doubles; the
+  /// slices are verified exactly.
+  std::optional<std::array<double, 2>> flat_cut(face_descriptor needle, halfedge_descriptor longest) const {
+    if (mesh_.face(longest) != needle) return std::nullopt;
+    const Point3d a = approx_point3d(mesh_.point(mesh_.source(longest)));
+    const Point3d b = approx_point3d(mesh_.point(mesh_.target(longest)));
+    const Point3d c = approx_point3d(mesh_.point(mesh_.target(mesh_.next(longest))));
+    const Point3d ab = sub(b, a), ac = sub(c, a);
+    const double length = norm(ab);
+    if (!(length > 0)) return std::nullopt;
+    const double foot = dot(ab, ac) / length, height = norm(cross(ab, ac)) / length;
+    const double tan_needle = std::tan(o_.needle_angle * kPi / 180.0);
+    if (!(foot > 0 && foot < length) || !(height < tan_needle * foot) || !(height < tan_needle * (length - foot)))
+      return std::nullopt;
+    const double half_middle = height / std::tan(1.2 * o_.needle_angle * kPi / 180.0);
+    const std::array<double, 2> t{(foot - half_middle) / length, (foot + half_middle) / length};
+    if (!(t[0] >= 0.05 && t[1] <= 0.95)) return std::nullopt;
+    return t;
   }
 
   /// Whether face f has corners strictly on both sides of the plane (exact).

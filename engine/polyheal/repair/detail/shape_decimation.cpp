@@ -470,9 +470,33 @@ struct ShapeDecimator::Impl {
       if (t[1] > t[0] + 1) plan.diagonals.emplace_back(ring[t[0]], ring[t[1]]);
       if (t[2] > t[1] + 1) plan.diagonals.emplace_back(ring[t[1]], ring[t[2]]);
     }
-    for (const Triple& t : plan.proposed)
-      for (face_descriptor f : replaced)
-        if (!same_side(corners(f), t)) return false;
+    // No triangle turns against the surface it replaces: against the face
+    // on each side of the hole it spans (the face that side came from), or,
+    // spanning none, against every face replaced. (Against every face
+    // always refused a point on a crease: its faces in the other plane are
+    // perpendicular to the new ones in this.)
+    auto side_face = [&](std::size_t i) {  // the replaced face on side ring[i] -> ring[i + 1]
+      const vertex_descriptor a = ring[i], b = ring[(i + 1) % n];
+      for (const auto& [x, y] : {std::pair{a, b}, std::pair{b, a}}) {
+        const auto [h, found] = CGAL::halfedge(x, y, mesh);
+        if (found && !mesh.is_border(h) && mesh.target(mesh.next(h)) == u) return mesh.face(h);
+      }
+      return Mesh::null_face();
+    };
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      bool spans_side = false;
+      for (int e = 0; e < 3; ++e) {
+        const std::size_t i = tris[t][e], j = tris[t][(e + 1) % 3];
+        if ((i + 1) % n != j) continue;  // a diagonal, not side i of the hole
+        const face_descriptor f = side_face(i);
+        if (f == Mesh::null_face()) continue;
+        spans_side = true;
+        if (!same_side(corners(f), plan.proposed[t])) return false;
+      }
+      if (!spans_side)
+        for (face_descriptor f : replaced)
+          if (!same_side(corners(f), plan.proposed[t])) return false;
+    }
     return acceptable(plan);
   }
 
