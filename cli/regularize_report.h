@@ -120,8 +120,8 @@ inline void print_regularize_text(const RepairFiles& a, const RegularizeReport& 
                 r.rounding_pairs, r.rounding_moves, r.rounding_passes);
   if (r.faces_out == 0)
     std::printf("  no face left: the input encloses no volume (winding number 0 everywhere off it: a surface facing "
-                "inwards, or a double-sided sheet, whose opposite faces cancel); `polyheal rebuild` makes a solid "
-                "of a sheet\n");
+                "inwards, or a double-sided sheet, whose opposite faces cancel); `polyheal repair` unites a surface "
+                "facing inwards turned outwards, `polyheal rebuild` makes a solid of a sheet\n");
   else
     std::printf("  distance to the input: output -> input at most %.3g; Hausdorff %.6g +- %.2g (%.3g%% of the bbox "
                 "diagonal)\n",
