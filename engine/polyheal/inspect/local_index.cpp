@@ -41,6 +41,7 @@ struct LocalIndex::Impl {
   std::vector<CGAL::Bbox_3> box;          // by face index
   std::vector<std::int32_t> leaf_of;      // by face index; kNone: not indexed
   std::size_t count = 0;
+  std::size_t inserted = 0;  // leaves inserted since the tree was last built
 
   std::optional<VertexIdentityMap> identity;  // kVertexIdentity
 
@@ -102,6 +103,20 @@ struct LocalIndex::Impl {
     nodes[n].right = r;
     nodes[n].box = nodes[l].box + nodes[r].box;
     return n;
+  }
+
+  /// The balanced tree again over every indexed face: greedy insertions
+  /// never rebalance, and after many edits in one region the descent and
+  /// the queries get deep.
+  void rebuild() {
+    std::vector<std::uint32_t> order;
+    for (std::size_t i = 0; i < leaf_of.size(); ++i)
+      if (leaf_of[i] != kNone) order.push_back(static_cast<std::uint32_t>(i));
+    nodes.clear();
+    free_nodes.clear();
+    root = kNone;
+    inserted = 0;
+    if (!order.empty()) root = build(order, 0, order.size(), kNone);
   }
 
   void refit(std::int32_t n) {
@@ -264,6 +279,8 @@ LocalIndex::~LocalIndex() = default;
 
 void LocalIndex::update(const std::vector<face_descriptor>& faces) {
   for (face_descriptor f : faces) impl_->insert(f);
+  impl_->inserted += faces.size();
+  if (impl_->inserted > 2 * impl_->count + 1024) impl_->rebuild();
 }
 
 void LocalIndex::remove(face_descriptor f) { impl_->erase(static_cast<std::uint32_t>(f)); }
