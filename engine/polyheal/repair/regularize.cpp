@@ -26,6 +26,7 @@
 #include "polyheal/mesh/mesh.h"
 #include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/union_find.h"
+#include "polyheal/mesh/vec3.h"
 #include "polyheal/mesh/weld.h"
 #include "polyheal/repair/deintersect.h"
 #include "polyheal/repair/detail/distance.h"
@@ -1402,8 +1403,6 @@ namespace {
 /// §5.1.5), then made a point of the triangle exactly: v, w >= 0 and
 /// v + w <= 1 in real arithmetic on the returned doubles.
 std::array<double, 2> nearest_parameters(const Point3d& p, const std::array<Point3d, 3>& c) {
-  auto sub = [](const Point3d& x, const Point3d& y) { return Point3d{x[0] - y[0], x[1] - y[1], x[2] - y[2]}; };
-  auto dot = [](const Point3d& x, const Point3d& y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
   const Point3d ab = sub(c[1], c[0]), ac = sub(c[2], c[0]), ap = sub(p, c[0]);
   const double d1 = dot(ab, ap), d2 = dot(ac, ap);
   std::array<double, 2> vw{0, 0};
@@ -1465,9 +1464,8 @@ double squared_distance_upper(const Point3d& p, const std::array<Point3d, 3>& c)
   // not: the nearest point of each edge is a witness too.
   for (int i = 0; i < 3; ++i) {
     const int j = (i + 1) % 3;
-    const Point3d e{c[j][0] - c[i][0], c[j][1] - c[i][1], c[j][2] - c[i][2]};
-    const double along = (p[0] - c[i][0]) * e[0] + (p[1] - c[i][1]) * e[1] + (p[2] - c[i][2]) * e[2];
-    const double t = along / (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+    const Point3d e = sub(c[j], c[i]);
+    const double t = dot(sub(p, c[i]), e) / squared_norm(e);
     best = std::min(best, bound(i, j, j, t > 0 ? (t < 1 ? t : 1.0) : 0.0, 0.0));
   }
   return best;
