@@ -260,9 +260,11 @@ class Pipeline {
     next.soup = turned_outward(cur_.soup, n, &faces);
     // Turning faces changes no position, edge or intersection: the checks
     // are made again for the shape fields (and the caller checks the
-    // written file anyway); TetGen's verdict does not depend on orientation.
+    // written file anyway), the intersecting pairs taken as they were (none:
+    // certified); TetGen's verdict does not depend on orientation.
     InspectOptions io;
     io.tetgen_segments = o_.for_tetgen;
+    io.self_intersections = &cur_.report.self_intersections;
     next.report = inspect(next.soup, io);
     next.report.tetgen_refused = cur_.report.tetgen_refused;
     next.defects = defect_count(next.report, o_.for_tetgen);
