@@ -48,15 +48,27 @@ Tri exact_triangle(const Soup& s, const FanTriangle& t, bool degenerate) {
   return Tri{{point(s, t.v[0]), point(s, t.v[1]), point(s, t.v[2])}, {t.v[0], t.v[1], t.v[2]}, degenerate};
 }
 
-/// Degeneracy (exact collinearity) of each triangle, decided once, in parallel.
-std::vector<char> degenerate_flags(const Soup& s, const std::vector<FanTriangle>& tris, bool parallel) {
-  std::vector<char> out(tris.size());
-  detail::for_each_index(tris.size(), parallel, [&](std::size_t i) {
-    const FanTriangle& t = tris[i];
-    out[i] = CGAL::collinear(point(s, t.v[0]), point(s, t.v[1]), point(s, t.v[2]));
-  });
-  return out;
-}
+/// Degeneracy (exact collinearity) of each triangle, decided when a pair
+/// first needs it and kept (from any thread): a check of a few changed faces
+/// (`only`) asks it of the faces near them, not of the whole soup.
+class DegenerateFlags {
+ public:
+  DegenerateFlags(const Soup& s, const std::vector<FanTriangle>& tris) : s_(s), tris_(tris), known_(tris.size()) {}
+  bool operator()(std::size_t i) const {
+    char k = known_[i].load(std::memory_order_relaxed);  // 0: not yet, 1: no, 2: yes
+    if (k == 0) {
+      const FanTriangle& t = tris_[i];
+      k = CGAL::collinear(point(s_, t.v[0]), point(s_, t.v[1]), point(s_, t.v[2])) ? 2 : 1;
+      known_[i].store(k, std::memory_order_relaxed);
+    }
+    return k == 2;
+  }
+
+ private:
+  const Soup& s_;
+  const std::vector<FanTriangle>& tris_;
+  mutable std::vector<std::atomic<char>> known_;
+};
 
 /// All intersecting pairs of `boxes` through `callback`, each once.
 ///
@@ -123,7 +135,7 @@ void box_pairs(std::vector<const Box*>& boxes, const Callback& callback, int dep
 template <class Found>
 void scan(const Soup& s, const SelfIntersectionOptions& o, Found found, const std::atomic<bool>& stop) {
   const std::vector<FanTriangle> tris = fan_triangles(s);
-  const std::vector<char> degenerate = degenerate_flags(s, tris, o.parallel);
+  const DegenerateFlags degenerate(s, tris);
   std::vector<Box> boxes;
   boxes.reserve(tris.size());
   for (std::size_t i = 0; i < tris.size(); ++i) {
@@ -143,8 +155,8 @@ void scan(const Soup& s, const SelfIntersectionOptions& o, Found found, const st
     if (stop.load(std::memory_order_relaxed)) return;
     const FanTriangle &a = tris[x.info()], &b = tris[y.info()];
     if (a.face == b.face) return;  // two fan triangles of one polygon
-    if (detail::faces_intersect<InputKernel>(exact_triangle(s, a, degenerate[x.info()]),
-                                             exact_triangle(s, b, degenerate[y.info()])))
+    if (detail::faces_intersect<InputKernel>(exact_triangle(s, a, degenerate(x.info())),
+                                             exact_triangle(s, b, degenerate(y.info()))))
       found(a.face, b.face);
   };
   if (o.only) {
