@@ -801,7 +801,9 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
   // face is named by its corners (input point or grid vertex), so a pair of
   // faces the last check saw gives the same answer again. Only faces new
   // since then are checked (against everything); the last intersecting
-  // pairs whose faces are both still there are carried over.
+  // pairs whose faces are both still there are carried over. What the last
+  // check saw is kept by index for grid faces (their grid triangle) and kept
+  // facets (their facet), by name for strip faces (few).
   using FaceName = std::array<std::int64_t, 3>;
   struct FaceNameHash {
     std::size_t operator()(const FaceName& n) const {
@@ -810,7 +812,8 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
       return h;
     }
   };
-  std::unordered_set<FaceName, FaceNameHash> last_checked;
+  std::vector<char> grid_checked(tris.size(), 0), kept_checked(T, 0);
+  std::unordered_set<FaceName, FaceNameHash> strips_checked;
   std::vector<std::pair<FaceName, FaceName>> last_intersecting;
   bool checked_before = false;
   for (int attempt = 0;; ++attempt) {
@@ -1147,11 +1150,13 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
           out_patch.push_back(-1);
           out_grid.push_back(static_cast<std::uint32_t>(t));
         }
+      std::vector<std::int64_t> out_kept(out_tris.size(), -1);  // per output triangle: its kept facet (-1: none)
       for (std::uint32_t t : kept_tris) {
         const std::int64_t p = patch[t];
         if (!in(p)) continue;
         out_tris.push_back({kept_vertex(f.tris[t][0], t), kept_vertex(f.tris[t][1], t), kept_vertex(f.tris[t][2], t)});
         out_patch.push_back(p);
+        out_kept.push_back(t);
       }
       for (std::size_t p = 0; p < P; ++p) {
         if (!in(std::int64_t(p))) continue;
@@ -1160,53 +1165,55 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
           for (int k = 0; k < 3; ++k) t[k] = s[k] >= 0 ? id[std::size_t(s[k])] : grid_vertex(Index(-s[k] - 1));
           out_tris.push_back(t);
           out_patch.push_back(std::int64_t(p));
+          out_kept.push_back(-1);
         }
       }
       // The joined surface must be a closed 2-manifold: every edge once in
       // each direction, every vertex one fan. A patch with a face at a vertex
       // where that fails is given up (and with none there, every patch).
+      // Faces around each vertex, as one array (offsets by vertex).
+      std::vector<std::uint32_t> first(out_vertices.size() + 1, 0), around(3 * out_tris.size());
+      for (const Tri& t : out_tris)
+        for (Index v : t) ++first[v + 1];
+      for (std::size_t v = 0; v < out_vertices.size(); ++v) first[v + 1] += first[v];
       {
-        std::unordered_map<std::uint64_t, int> directed;
-        std::vector<std::vector<std::uint32_t>> around(out_vertices.size());
+        std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
         for (std::size_t t = 0; t < out_tris.size(); ++t)
-          for (int k = 0; k < 3; ++k) {
-            ++directed[edge_key(out_tris[t][k], out_tris[t][(k + 1) % 3])];
-            around[out_tris[t][k]].push_back(static_cast<std::uint32_t>(t));
-          }
+          for (Index v : out_tris[t]) around[fill[v]++] = static_cast<std::uint32_t>(t);
+      }
+      {
+        // Every face with the edge v b has v: v's own faces tell how often
+        // each edge at v is used in each direction.
+        std::vector<Index> next, prev;
         auto fine = [&](Index v) {
-          if (around[v].empty()) return true;
-          for (std::uint32_t t : around[v]) {
+          next.clear();
+          prev.clear();
+          for (std::uint32_t i = first[v]; i < first[v + 1]; ++i) {
+            const Tri& t = out_tris[around[i]];
             int k = 0;
-            while (out_tris[t][k] != v) ++k;
-            const Index b = out_tris[t][(k + 1) % 3];
-            const auto ab = directed.find(edge_key(v, b)), ba = directed.find(edge_key(b, v));
-            if (ab->second != 1 || ba == directed.end() || ba->second != 1) return false;
+            while (t[k] != v) ++k;
+            next.push_back(t[(k + 1) % 3]);
+            prev.push_back(t[(k + 2) % 3]);
           }
+          if (next.empty()) return true;
+          for (Index b : next)
+            if (std::count(next.begin(), next.end(), b) != 1 || std::count(prev.begin(), prev.end(), b) != 1)
+              return false;
           // one fan: from a face, cross the edge (prev, v) into the face that
           // has v -> prev, until back
-          std::unordered_map<Index, std::uint32_t> by_next;  // v -> b: the face
-          for (std::uint32_t t : around[v]) {
-            int k = 0;
-            while (out_tris[t][k] != v) ++k;
-            by_next.emplace(out_tris[t][(k + 1) % 3], t);
-          }
-          std::uint32_t t = around[v][0];
-          std::size_t steps = 0;
+          std::size_t i = 0, steps = 0;
           do {
-            int k = 0;
-            while (out_tris[t][k] != v) ++k;
-            const auto it = by_next.find(out_tris[t][(k + 2) % 3]);
-            if (it == by_next.end()) return false;
-            t = it->second;
+            i = std::size_t(std::find(next.begin(), next.end(), prev[i]) - next.begin());
+            if (i == next.size()) return false;
             ++steps;
-          } while (t != around[v][0] && steps <= around[v].size());
-          return steps == around[v].size();
+          } while (i != 0 && steps <= next.size());
+          return steps == next.size();
         };
         for (Index v = 0; v < out_vertices.size(); ++v) {
           if (fine(v)) continue;
           bool blamed = false;
-          for (std::uint32_t t : around[v])
-            if (out_patch[t] >= 0) {
+          for (std::uint32_t i = first[v]; i < first[v + 1]; ++i)
+            if (const std::uint32_t t = around[i]; out_patch[t] >= 0) {
               fails[std::size_t(out_patch[t])] = 1;
               blamed = true;
             }
@@ -1228,7 +1235,10 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
         }
       std::vector<char> only(out_tris.size(), 0);
       for (std::size_t t = 0; t < out_tris.size(); ++t)
-        only[t] = checked_before ? !last_checked.count(names[t]) : out_patch[t] >= 0;
+        only[t] = checked_before ? !(t < out_grid.size() ? grid_checked[out_grid[t]]
+                                     : out_kept[t] >= 0    ? kept_checked[std::size_t(out_kept[t])]
+                                                           : strips_checked.count(names[t]) > 0)
+                                 : out_patch[t] >= 0;
       SelfIntersectionOptions so;
       so.only = &only;
       bool clean = true;
@@ -1245,26 +1255,42 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
         for (const FacePair& q : find_self_intersections(joined, so))
           if (out_patch[q.first] >= 0 || out_patch[q.second] >= 0) bad.push_back(q);  // the grid is trusted
         if (checked_before) {
-          std::unordered_map<FaceName, std::size_t, FaceNameHash> face_named;
-          for (std::size_t t = 0; t < out_tris.size(); ++t) face_named.emplace(names[t], t);
+          std::unordered_map<FaceName, std::size_t, FaceNameHash> face_named;  // the carried-over pairs' faces
           for (const auto& [x, y] : last_intersecting) {
-            const auto a = face_named.find(x), b = face_named.find(y);
-            if (a != face_named.end() && b != face_named.end())
-              bad.push_back({std::min(a->second, b->second), std::max(a->second, b->second)});
+            face_named.emplace(x, out_tris.size());
+            face_named.emplace(y, out_tris.size());
+          }
+          for (std::size_t t = 0; t < out_tris.size(); ++t)
+            if (const auto it = face_named.find(names[t]); it != face_named.end() && it->second == out_tris.size())
+              it->second = t;
+          for (const auto& [x, y] : last_intersecting) {
+            const std::size_t a = face_named.at(x), b = face_named.at(y);
+            if (a < out_tris.size() && b < out_tris.size()) bad.push_back({std::min(a, b), std::max(a, b)});
           }
           std::sort(bad.begin(), bad.end());
           bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
         }
-        last_checked.clear();
-        for (std::size_t t = 0; t < out_tris.size(); ++t) last_checked.insert(names[t]);
+        std::fill(grid_checked.begin(), grid_checked.end(), 0);
+        std::fill(kept_checked.begin(), kept_checked.end(), 0);
+        strips_checked.clear();
+        for (std::size_t t = 0; t < out_tris.size(); ++t) {
+          if (t < out_grid.size()) grid_checked[out_grid[t]] = 1;
+          else if (out_kept[t] >= 0) kept_checked[std::size_t(out_kept[t])] = 1;
+          else strips_checked.insert(names[t]);
+        }
         last_intersecting.clear();
         for (const FacePair& q : bad) last_intersecting.push_back({names[q.first], names[q.second]});
         checked_before = true;
         {
-          std::unordered_map<std::uint64_t, std::uint32_t> face_of;  // a -> b: its face
-          for (std::size_t t = 0; t < out_tris.size(); ++t)
-            for (int k = 0; k < 3; ++k)
-              face_of.emplace(edge_key(out_tris[t][k], out_tris[t][(k + 1) % 3]), std::uint32_t(t));
+          // The face with the directed edge a -> b (-1: none), among a's.
+          auto face_of = [&](Index a, Index b) -> std::int64_t {
+            for (std::uint32_t i = first[a]; i < first[a + 1]; ++i) {
+              const Tri& t = out_tris[around[i]];
+              for (int k = 0; k < 3; ++k)
+                if (t[k] == a && t[(k + 1) % 3] == b) return around[i];
+            }
+            return -1;
+          };
           const double cos_fold = std::cos(179 * M_PI / 180);
           auto unit_normal = [&](std::size_t t) {
             const Point3d n = normal(out_vertices[out_tris[t][0]].p, out_vertices[out_tris[t][1]].p,
@@ -1278,9 +1304,9 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
               continue;  // only strip faces
             const Point3d n = unit_normal(t);
             for (int k = 0; k < 3; ++k) {
-              const auto it = face_of.find(edge_key(out_tris[t][(k + 1) % 3], out_tris[t][k]));
-              if (it != face_of.end() && dot(n, unit_normal(it->second)) < cos_fold)
-                bad.push_back({std::min<std::size_t>(t, it->second), std::max<std::size_t>(t, it->second)});
+              const std::int64_t o = face_of(out_tris[t][(k + 1) % 3], out_tris[t][k]);
+              if (o >= 0 && dot(n, unit_normal(std::size_t(o))) < cos_fold)
+                bad.push_back({std::min(t, std::size_t(o)), std::max(t, std::size_t(o))});
             }
           }
         }
