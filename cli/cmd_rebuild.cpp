@@ -64,6 +64,7 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
         {"kept_patches", r.kept_patches},
         {"patches_given_up", r.patches_given_up},
         {"planar_collapses", r.collapses},
+        {"coarsening_retries", r.coarsening_retries},
         {"decimated", r.decimated},
         {"sharpened", r.sharpened},
         {"faces", r.faces_out},

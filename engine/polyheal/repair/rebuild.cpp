@@ -2213,9 +2213,50 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     std::vector<char> on_plane(vertices.size(), 0);
     for (std::size_t v = 0; v < vertices.size(); ++v)
       on_plane[v] = vertices[v].facet >= 0 && !vertices[v].clamped && !kept.frozen(vertices[v].p);
-    PlanarCoarsening coarsening(f, vertices, on_plane, tris);
-    r.collapses = coarsening.run();
-    coarsening.result(vertices, tris);
+    // The collapses keep the surface as a point set only up to the rounding
+    // of its vertices, which lie near (not on) their facets' planes: where
+    // nearly degenerate triangles meet at a crease (refined grids make
+    // many), a fan that tiles its polygon in projection can fold in space.
+    // So the coarsened surface is checked exactly; the extracted vertices
+    // within reach of a face that intersects are left where they are, and
+    // the coarsening is done again. The extracted surface itself, the last
+    // resort, intersects nothing: its pieces lie in their own tetrahedra.
+    for (int attempt = 0;; ++attempt) {
+      PlanarCoarsening coarsening(f, vertices, on_plane, tris);
+      const std::size_t collapses = coarsening.run();
+      std::vector<OutVertex> coarse_vertices;
+      std::vector<Tri> coarse_tris;
+      coarsening.result(coarse_vertices, coarse_tris);
+      Soup coarse;
+      for (const OutVertex& v : coarse_vertices) coarse.points.push_back(v.p);
+      for (const Tri& t : coarse_tris) coarse.add_triangle(t[0], t[1], t[2]);
+      const std::vector<FacePair> folds = find_self_intersections(coarse);
+      if (folds.empty()) {
+        r.collapses = collapses;
+        vertices = std::move(coarse_vertices);
+        tris = std::move(coarse_tris);
+        break;
+      }
+      ++r.coarsening_retries;
+      if (attempt == 3) break;  // the extracted surface, uncoarsened
+      std::vector<Region> reach;  // each intersecting face's box, grown by its size
+      for (const FacePair& p : folds)
+        for (std::size_t face : {p.first, p.second}) {
+          Region b;
+          for (Index v : coarse_tris[face]) grow(b, coarse_vertices[v].p, b.count++ == 0);
+          const double d = dist(b.lo, b.hi);
+          for (int k = 0; k < 3; ++k) {
+            b.lo[k] -= d;
+            b.hi[k] += d;
+          }
+          reach.push_back(b);
+        }
+      for (std::size_t v = 0; v < vertices.size(); ++v)
+        for (const Region& b : reach)
+          if (vertices[v].p[0] >= b.lo[0] && vertices[v].p[0] <= b.hi[0] && vertices[v].p[1] >= b.lo[1] &&
+              vertices[v].p[1] <= b.hi[1] && vertices[v].p[2] >= b.lo[2] && vertices[v].p[2] <= b.hi[2])
+            on_plane[v] = 0;
+    }
   }
   Soup& out = result.soup;
   for (const OutVertex& v : vertices) out.points.push_back(v.p);

@@ -120,6 +120,7 @@ struct RebuildReport {
   std::size_t kept_patches = 0;         // ... in this many patches, zipped to the grid surface
   std::size_t patches_given_up = 0;     // clean patches the zipper could not join (grid surface there)
   std::size_t collapses = 0;            // planar vertices removed
+  std::size_t coarsening_retries = 0;   // coarsenings found folded (exactly) and done again, more held back
   std::size_t decimated = 0;            // vertices removed by decimation
   std::size_t sharpened = 0;            // vertices moved onto sharp edges and corners
   std::size_t faces_out = 0, vertices_out = 0, components_out = 0, face_groups = 0;
