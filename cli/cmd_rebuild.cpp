@@ -1,4 +1,5 @@
 // polyheal rebuild IN -o OUT — Hu, Lee, Blacker & Zhu's overlay-grid cleanup.
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -32,7 +33,8 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
       {"unchanged", r.unchanged},
       {"volume", r.volume},
       {"parameters",
-       {{"cell", r.cell}, {"cell_rule", r.cell_rule}, {"feature_angle", a.options.feature_angle},
+       {{"cell", r.cell}, {"cell_rule", r.cell_rule}, {"refine", a.options.refine},
+        {"feature_angle", a.options.feature_angle},
         {"simplify", a.options.simplify}, {"sharpen", a.options.sharpen}, {"keep_clean", a.options.keep_clean},
         {"keep_regions", a.options.keep_regions},
         {"sheets", a.sheets}}},
@@ -53,13 +55,20 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
         {"octree_nodes", r.octree_nodes},
         {"boundary_cells", r.boundary_cells},
         {"closure_cells", r.closure_cells},
+        {"halvings", r.halvings},
+        {"refined_tets", r.refined_tets},
+        {"bisections", r.bisections},
+        {"leaf_tets", r.leaf_tets},
+        {"finest_cell", std::ldexp(r.cell, -r.finest_level / 3)},
+        {"thickened_corners", r.thickened_corners},
         {"corners", r.corners},
         {"inside_corners", r.inside_corners},
         {"crossed_edges", r.crossed_edges},
         {"facet_crossings", r.facet_crossings},
         {"interpolated", r.interpolated}}},
       {"output_mesh",
-       {{"extracted_faces", r.extracted_faces},
+       {{"beads_dropped", r.beads_dropped},
+        {"extracted_faces", r.extracted_faces},
         {"kept_faces", r.kept_faces},
         {"kept_patches", r.kept_patches},
         {"patches_given_up", r.patches_given_up},
@@ -95,6 +104,7 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
         {"octree", r.seconds_octree},
         {"winding", r.seconds_winding},
         {"extract", r.seconds_extract},
+        {"refine", r.seconds_refine},
         {"simplify", r.seconds_simplify},
         {"write_and_certify", write_s}}},
   };
@@ -126,6 +136,16 @@ void print_text(const RebuildArgs& a, const RebuildReport& r) {
                 "cells + %zu closing gaps and holes\n",
                 r.cell, r.cell_rule.c_str(), r.largest_gap, r.diagonal, r.depth, r.octree_nodes, r.boundary_cells,
                 r.closure_cells);
+    if (r.refined_tets)
+      std::printf("  refined: %zu tetrahedra missed the surface (spikes, thin parts, acute edges, rims) and were bisected "
+                  "(%zu bisections in all, down to cell %g); %zu tetrahedra\n",
+                  r.refined_tets, r.bisections, std::ldexp(r.cell, -r.finest_level / 3), r.leaf_tets);
+    if (r.thickened_corners)
+      std::printf("  %zu corners within a finest step of parts thinner than that: inside (a shell one step thick)\n",
+                  r.thickened_corners);
+    if (r.beads_dropped)
+      std::printf("  %zu extracted pieces smaller than a cell dropped: beads of a thin part another piece stands for\n",
+                  r.beads_dropped);
     if (r.sheet_facets)
       std::printf("  %zu facets bound no volume (open or double-sided sheets): %s\n", r.sheet_facets,
                   r.shell > 0 ? ("wrapped in a shell of half-thickness " + std::to_string(r.shell)).c_str()
@@ -151,9 +171,10 @@ void print_text(const RebuildArgs& a, const RebuildReport& r) {
                 r.extracted_faces, r.collapses, r.decimated, r.faces_out, r.vertices_out, r.components_out,
                 r.face_groups);
   }
-  std::printf("  time: prepare %.3f s, octree %.3f s, winding %.3f s, extract %.3f s, simplify %.3f s, certify %.3f s\n",
-              r.seconds_prepare, r.seconds_octree, r.seconds_winding, r.seconds_extract, r.seconds_simplify,
-              r.seconds_certify);
+  std::printf("  time: prepare %.3f s, octree %.3f s, winding %.3f s, extract %.3f s, refine %.3f s, simplify %.3f s, "
+              "certify %.3f s\n",
+              r.seconds_prepare, r.seconds_octree, r.seconds_winding, r.seconds_extract, r.seconds_refine,
+              r.seconds_simplify, r.seconds_certify);
   if (r.hausdorff >= 0)
     std::printf("  Hausdorff distance to the input: %g (+%g) = %.3g cells; input to output %g (detail lost), output "
                 "to input %g (gap and hole fills)\n",
@@ -188,7 +209,8 @@ void add_rebuild(CLI::App& app, int& exit_code) {
   cmd->footer(
       "Any soup is accepted: no manifoldness or closure needed; polygons are fanned,\n"
       "zero-area faces left out, inconsistently oriented components made consistent.\n"
-      "An octree is refined where it meets the facets down to the cell size; each\n"
+      "An octree is refined where it meets the facets down to the cell size, and\n"
+      "its tetrahedra bisected further where they miss the surface (--refine); each\n"
       "grid corner is inside when its generalised winding number is above 1/2 (gaps\n"
       "and holes are spanned, overlaps count once). Facets that bound no volume\n"
       "(open or double-sided sheets) are wrapped in a shell one cell thick on each\n"
@@ -215,6 +237,12 @@ void add_rebuild(CLI::App& app, int& exit_code) {
   cmd->add_option("--cell", args->cell,
                   "cell size: model units, or a percentage of the bbox diagonal (default: 1% of the diagonal, or "
                   "twice the largest gap between boundary loops if larger)");
+  cmd->add_option("--refine", args->options.refine,
+                  "halvings of the cell where the grid misses the surface: a tetrahedron of the grid holding both "
+                  "sides of a part thinner than itself or an acute edge (facets more than 120 degrees apart), or, "
+                  "with all its corners outside, the rim of a hole, is bisected, down to cell / 2^N (default 2; 0: "
+                  "uniform cells)")
+      ->check(CLI::Range(0, 8));
   cmd->add_option("--feature-angle", args->options.feature_angle,
                   "degrees: output faces whose normals differ by less join one face group (input without groups)")
       ->check(CLI::Range(0.0, 180.0));

@@ -28,6 +28,7 @@
 #include "polyheal/mesh/vec3.h"
 #include "polyheal/mesh/weld.h"
 #include "polyheal/repair/detail/distance.h"
+#include "polyheal/repair/detail/kuhn_mesh.h"
 #include "polyheal/repair/detail/shape_decimation.h"
 
 namespace polyheal {
@@ -369,20 +370,23 @@ class WindingNumber {
 };
 
 // ---------------------------------------------------------------------------
-// The overlay grid: corners (i, j, k) at origin + (i, j, k) * h, computed by
-// one formula so that every cell sees the same doubles.
+// The overlay grid: cubes (i, j, k) of side h at origin + (i, j, k) * h, and
+// the corners of their tetrahedra on the fine lattice, origin + (i, j, k) *
+// step with step = h / 2^halvings. One formula each, so that every cube and
+// tetrahedron sees the same doubles; a cube corner has the same doubles by
+// both (scaling by a power of two is exact).
 
 struct Grid {
   Point3d origin{};
   double h = 0;
+  double step = 0;
   double x(int axis, std::int64_t i) const { return origin[axis] + double(i) * h; }
-  Point3d corner(std::int64_t i, std::int64_t j, std::int64_t k) const { return {x(0, i), x(1, j), x(2, k)}; }
+  Point3d at(const detail::KuhnMesh::Coord& p) const {
+    return {origin[0] + double(p[0]) * step, origin[1] + double(p[1]) * step, origin[2] + double(p[2]) * step};
+  }
 };
 
-constexpr int kBits = 21;
-std::uint64_t key(std::int64_t i, std::int64_t j, std::int64_t k) {
-  return (std::uint64_t(i) << (2 * kBits)) | (std::uint64_t(j) << kBits) | std::uint64_t(k);
-}
+constexpr int kBits = 21;  // bits per fine-lattice coordinate (detail::KuhnMesh)
 
 struct Cell {
   std::int64_t i, j, k;
@@ -443,12 +447,6 @@ class Octree {
   std::vector<Cell> cells_;
 };
 
-// The Kuhn triangulation of a cube: tetrahedron p runs 000 -> e_a -> e_a + e_b
-// -> 111 for the permutation (a, b, c) = kPerm[p]; its orientation is the
-// permutation's sign. Corners are numbered by bits (x = 1, y = 2, z = 4).
-constexpr int kPerm[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};
-constexpr int kPermSign[6] = {1, 1, 1, -1, -1, -1};
-
 /// True when (a, b, c, d) is an even permutation of (0, 1, 2, 3).
 bool even(int a, int b, int c, int d) {
   const int p[4] = {a, b, c, d};
@@ -458,48 +456,45 @@ bool even(int a, int b, int c, int d) {
   return inversions % 2 == 0;
 }
 
+constexpr Index kNoIndex = ~Index(0);
+
+/// The directed edge a -> b as one key.
+std::uint64_t edge_key(Index a, Index b) { return (std::uint64_t(a) << 32) | std::uint64_t(b); }
+
 struct OutVertex {
   Point3d p;
   std::int64_t facet;  // the facet it lies on; -1: interpolated across a gap or hole
   bool clamped = false;  // moved off the facet, away from a grid corner
 };
 
+/// Marching tetrahedra over the leaves of the grid's tetrahedral mesh: the
+/// boundary of the inside corners. The mesh is conforming, so the surface is
+/// closed and 2-manifold, each piece lying in its own tetrahedron.
 class Extractor {
  public:
-  Extractor(const Facets& f, const Grid& g, const std::vector<Cell>& cells,
-            const std::unordered_map<std::uint64_t, std::uint32_t>& corner_id, const std::vector<double>& field,
-            RebuildReport& r)
-      : f_(f), g_(g), cells_(cells), corner_id_(corner_id), phi_(field), r_(r) {}
+  Extractor(const Facets& f, const Grid& g, const std::vector<Cell>& cells, const detail::KuhnMesh& mesh,
+            const std::vector<double>& field, RebuildReport& r)
+      : f_(f), g_(g), cells_(cells), mesh_(mesh), phi_(field), r_(r) {}
 
   void run(std::vector<OutVertex>& vertices, std::vector<Tri>& tris) {
-    for (const Cell& c : cells_) {
-      int in[8];
-      int count = 0;
-      for (int b = 0; b < 8; ++b) {
-        in[b] = inside(c.i + (b & 1), c.j + (b >> 1 & 1), c.k + (b >> 2 & 1));
-        count += in[b];
-      }
-      if (count == 0 || count == 8) continue;
-      for (int p = 0; p < 6; ++p) {
-        const int a = 1 << kPerm[p][0], b = a | 1 << kPerm[p][1];
-        const int v[4] = {0, a, b, 7};
-        tetrahedron(c, v, kPermSign[p], in, vertices, tris);
-      }
+    for (const detail::KuhnMesh::Tet& t : mesh_.tets()) {
+      if (!t.leaf) continue;
+      int in[4], count = 0;
+      for (int x = 0; x < 4; ++x) count += in[x] = phi_[t.v[x]] > 0;
+      if (count == 0 || count == 4) continue;
+      tetrahedron(t, in, vertices, tris);
     }
   }
 
  private:
   static constexpr double kClamp = 1.0 / 64;  // a vertex stays this fraction of its edge away from the corners
 
-  std::uint32_t corner(std::int64_t i, std::int64_t j, std::int64_t k) const { return corner_id_.at(key(i, j, k)); }
-  bool inside(std::int64_t i, std::int64_t j, std::int64_t k) const { return phi_[corner(i, j, k)] > 0; }
-
-  void tetrahedron(const Cell& c, const int v[4], int sign, const int in[8], std::vector<OutVertex>& vertices,
+  void tetrahedron(const detail::KuhnMesh::Tet& t, const int in[4], std::vector<OutVertex>& vertices,
                    std::vector<Tri>& tris) {
     int ins[4], outs[4], ni = 0, no = 0;
-    for (int x = 0; x < 4; ++x) (in[v[x]] ? ins[ni++] : outs[no++]) = x;
-    if (ni == 0 || ni == 4) return;
-    auto P = [&](int a, int b) { return vertex(c, v[a], v[b], vertices); };
+    for (int x = 0; x < 4; ++x) (in[x] ? ins[ni++] : outs[no++]) = x;
+    const int sign = mesh_.orientation(t);
+    auto P = [&](int a, int b) { return vertex(t, a, b, vertices); };
     auto emit = [&](Index a, Index b, Index d) {
       if (sign > 0) tris.push_back({a, b, d});
       else tris.push_back({a, d, b});
@@ -531,26 +526,26 @@ class Extractor {
     }
   }
 
-  /// The output vertex on the grid edge between corners `from` and `to` of
-  /// cell c (bit-numbered; one is inside, the other outside).
-  Index vertex(const Cell& c, int from, int to, std::vector<OutVertex>& vertices) {
-    int lo = from, hi = to;
-    if ((lo & hi) != lo) std::swap(lo, hi);  // Kuhn edges run from a corner to one above it
-    const std::int64_t i = c.i + (lo & 1), j = c.j + (lo >> 1 & 1), k = c.k + (lo >> 2 & 1);
-    const std::uint64_t ek = key(i, j, k) * 8 + std::uint64_t(hi & ~lo);
+  /// The output vertex on the edge between corners `from` and `to` of t (one
+  /// inside, the other outside). Each edge has one vertex, whichever
+  /// tetrahedron asks: the crossing is found among the facets of t's cube,
+  /// which hold every facet meeting the edge.
+  Index vertex(const detail::KuhnMesh::Tet& t, int from, int to, std::vector<OutVertex>& vertices) {
+    std::uint32_t a = t.v[from], b = t.v[to];
+    const std::uint64_t ek = edge_key(std::min(a, b), std::max(a, b));
     const auto found = edge_vertex_.find(ek);
     if (found != edge_vertex_.end()) return found->second;
-    const Point3d A = g_.corner(i, j, k);
-    const Point3d B = g_.corner(c.i + (hi & 1), c.j + (hi >> 1 & 1), c.k + (hi >> 2 & 1));
-    const double wa = phi_[corner(i, j, k)], wb = phi_[corner(c.i + (hi & 1), c.j + (hi >> 1 & 1), c.k + (hi >> 2 & 1))];
+    if (mesh_.corner(b) < mesh_.corner(a)) std::swap(a, b);  // measured from the lower end, whoever asks
+    const Point3d A = g_.at(mesh_.corner(a)), B = g_.at(mesh_.corner(b));
+    const double wa = phi_[a], wb = phi_[b];
     const bool a_inside = wa > 0;
     ++r_.crossed_edges;
-    OutVertex out = crossing(c, A, B, a_inside);
+    OutVertex out = crossing(cells_[t.cube], A, B, a_inside);
     if (out.facet < 0) {
       ++r_.interpolated;
-      double t = wa / (wa - wb);
-      t = std::clamp(t, kClamp, 1 - kClamp);
-      for (int x = 0; x < 3; ++x) out.p[x] = A[x] == B[x] ? A[x] : A[x] + t * (B[x] - A[x]);
+      double s = wa / (wa - wb);
+      s = std::clamp(s, kClamp, 1 - kClamp);
+      for (int x = 0; x < 3; ++x) out.p[x] = A[x] == B[x] ? A[x] : A[x] + s * (B[x] - A[x]);
     } else {
       ++r_.facet_crossings;
     }
@@ -607,11 +602,76 @@ class Extractor {
   const Facets& f_;
   const Grid& g_;
   const std::vector<Cell>& cells_;
-  const std::unordered_map<std::uint64_t, std::uint32_t>& corner_id_;
+  const detail::KuhnMesh& mesh_;
   const std::vector<double>& phi_;  // per corner: > 0 inside (see rebuild())
   RebuildReport& r_;
   std::unordered_map<std::uint64_t, Index> edge_vertex_;
 };
+
+/// Drops the components of the extracted surface that are smaller than a
+/// cell (bounding-box diagonal) and stand for nothing no other component
+/// stands for: every input component their vertices lie on (by facet) has
+/// another output component on it too. These are beads, where a spike or fin
+/// thinner than the finest tetrahedra left isolated inside corners. A
+/// component that alone represents an input component stays (a small part of
+/// its own), and so does one with no vertex on a facet. Returns how many went.
+std::size_t drop_beads(const Facets& f, std::vector<OutVertex>& vertices, std::vector<Tri>& tris, double h) {
+  UnionFind pieces(vertices.size());
+  for (const Tri& t : tris) {
+    pieces.unite(t[0], t[1]);
+    pieces.unite(t[0], t[2]);
+  }
+  UnionFind parts(f.points.size());  // the input's components
+  for (const Tri& t : f.tris) {
+    parts.unite(t[0], t[1]);
+    parts.unite(t[0], t[2]);
+  }
+  std::unordered_map<std::size_t, Region> box;                               // by piece
+  std::unordered_map<std::size_t, std::vector<std::size_t>> parts_of;        // piece -> input components
+  std::unordered_map<std::size_t, std::vector<std::size_t>> pieces_of;       // input component -> pieces
+  for (const Tri& t : tris)
+    for (Index v : t) {
+      const std::size_t piece = pieces.find(v);
+      Region& b = box[piece];
+      grow(b, vertices[v].p, b.count++ == 0);
+      if (vertices[v].facet < 0) continue;
+      const std::size_t part = parts.find(f.tris[std::size_t(vertices[v].facet)][0]);
+      parts_of[piece].push_back(part);
+      pieces_of[part].push_back(piece);
+    }
+  for (auto* lists : {&parts_of, &pieces_of})
+    for (auto& [key, list] : *lists) {
+      std::sort(list.begin(), list.end());
+      list.erase(std::unique(list.begin(), list.end()), list.end());
+    }
+  std::unordered_set<std::size_t> beads;
+  for (const auto& [piece, b] : box) {
+    const auto on = parts_of.find(piece);
+    if (dist(b.lo, b.hi) >= h || on == parts_of.end()) continue;
+    if (std::all_of(on->second.begin(), on->second.end(),
+                    [&](std::size_t part) { return pieces_of.at(part).size() > 1; }))
+      beads.insert(piece);
+  }
+  if (beads.empty()) return 0;
+  std::vector<Index> id(vertices.size(), kNoIndex);
+  std::vector<OutVertex> kept_vertices;
+  std::vector<Tri> kept_tris;
+  for (const Tri& t : tris) {
+    if (beads.count(pieces.find(t[0]))) continue;
+    Tri u;
+    for (int k = 0; k < 3; ++k) {
+      if (id[t[k]] == kNoIndex) {
+        id[t[k]] = static_cast<Index>(kept_vertices.size());
+        kept_vertices.push_back(vertices[t[k]]);
+      }
+      u[k] = id[t[k]];
+    }
+    kept_tris.push_back(u);
+  }
+  vertices = std::move(kept_vertices);
+  tris = std::move(kept_tris);
+  return beads.size();
+}
 
 }  // namespace
 
@@ -655,10 +715,6 @@ struct KeptRegions {
   std::vector<Point3d> points;  // kept points, sorted (frozen downstream)
   bool frozen(const Point3d& p) const { return std::binary_search(points.begin(), points.end(), p); }
 };
-
-constexpr Index kNoIndex = ~Index(0);
-
-std::uint64_t edge_key(Index a, Index b) { return (std::uint64_t(a) << 32) | std::uint64_t(b); }
 
 /// The simple loops of directed boundary edges (a -> b), each as its vertex
 /// sequence; false when some vertex starts two of them (not simple).
@@ -2009,6 +2065,8 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   if (r.depth >= kBits - 1)
     throw UnsupportedInput("the overlay grid would need 2^" + std::to_string(r.depth) +
                            " cells along an axis; choose a larger --cell");
+  r.halvings = std::clamp(options.refine, 0, kBits - 1 - r.depth);  // the fine lattice fits kBits
+  g.step = std::ldexp(g.h, -r.halvings);
   r.seconds_prepare = seconds_since(t0);
 
   // Phase 1 (§3.1): the octree, refined where it meets the facets.
@@ -2073,65 +2131,62 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
       r.shell = shell;
     }
   }
-  std::unordered_map<std::uint64_t, std::uint32_t> cell_id, corner_id;
-  std::vector<std::array<std::int64_t, 3>> corner_at;
+  // The cells as cubes of the tetrahedral mesh (same indices), their
+  // corners' winding numbers and the field phi (> 0 inside).
+  detail::KuhnMesh mesh(r.halvings);
+  for (const Cell& c : cells) mesh.add_cube(c.i, c.j, c.k);
   std::vector<double> wind;  // the winding number at each corner
   std::vector<double> w;     // the field phi at each corner
   const std::int64_t limit = std::int64_t(1) << r.depth;
   auto phi = [&](std::size_t c) {
     const double x = wind[c] - 0.5;
     if (!to_sheets) return x;
-    const Point3d q = g.corner(corner_at[c][0], corner_at[c][1], corner_at[c][2]);
+    const Point3d q = g.at(mesh.corner(std::uint32_t(c)));
     return std::max(x, 0.5 * (shell - std::sqrt(to_sheets->squared_distance(q))) / shell);
   };
-  auto add_corners = [&](std::size_t first_cell) {
-    const std::size_t first_corner = corner_at.size();
-    for (std::size_t c = first_cell; c < cells.size(); ++c)
-      for (int b = 0; b < 8; ++b) {
-        const std::int64_t i = cells[c].i + (b & 1), j = cells[c].j + (b >> 1 & 1), k = cells[c].k + (b >> 2 & 1);
-        if (corner_id.emplace(key(i, j, k), static_cast<std::uint32_t>(corner_at.size())).second)
-          corner_at.push_back({i, j, k});
-      }
-    wind.resize(corner_at.size());
-    w.resize(corner_at.size());
-    tbb::parallel_for(first_corner, corner_at.size(), [&](std::size_t c) {
-      wind[c] = winding(g.corner(corner_at[c][0], corner_at[c][1], corner_at[c][2]));
+  auto evaluate_new_corners = [&] {
+    const std::size_t first = wind.size();
+    wind.resize(mesh.corner_count());
+    w.resize(mesh.corner_count());
+    tbb::parallel_for(first, wind.size(), [&](std::size_t c) {
+      wind[c] = winding(g.at(mesh.corner(std::uint32_t(c))));
       w[c] = phi(c);
     });
   };
-  for (std::size_t c = 0; c < cells.size(); ++c) cell_id.emplace(key(cells[c].i, cells[c].j, cells[c].k), c);
-  add_corners(0);
-  // Adds cells wherever the surface leaves the current ones (from `first` on).
-  auto close = [&](std::size_t first) {
-    while (first < cells.size()) {
-      const std::size_t end = cells.size();
-      for (std::size_t c = first; c < end; ++c) {
-        int count = 0;
-        for (int b = 0; b < 8; ++b)
-          count += w[corner_id.at(key(cells[c].i + (b & 1), cells[c].j + (b >> 1 & 1), cells[c].k + (b >> 2 & 1)))] > 0;
-        if (count == 0 || count == 8) continue;
-        // The surface leaves the cell through its faces whose corners differ:
-        // the neighbour across such a face must be extracted too.
-        for (int axis = 0; axis < 3; ++axis)
-          for (int side = 0; side < 2; ++side) {
-            int face_count = 0;
-            for (int b = 0; b < 8; ++b)
-              if ((b >> axis & 1) == side)
-                face_count += w[corner_id.at(key(cells[c].i + (b & 1), cells[c].j + (b >> 1 & 1),
-                                                 cells[c].k + (b >> 2 & 1)))] > 0;
-            if (face_count == 0 || face_count == 4) continue;
-            std::int64_t n3[3] = {cells[c].i, cells[c].j, cells[c].k};
-            n3[axis] += side ? 1 : -1;
-            if (n3[axis] < 0 || n3[axis] >= limit) continue;
-            if (cell_id.emplace(key(n3[0], n3[1], n3[2]), static_cast<std::uint32_t>(cells.size())).second)
-              cells.push_back({n3[0], n3[1], n3[2], {}});
-          }
+  evaluate_new_corners();
+  // Adds cubes wherever the surface leaves the current ones: a leaf with a
+  // face on a cube face, its corners mixed, and no cube across. Looks at
+  // the leaves from `checked` on (older leaves were looked at before; their
+  // corners do not change), cube by cube, in cube order.
+  std::size_t checked = 0;
+  auto close = [&] {
+    while (checked < mesh.tets().size()) {
+      std::map<std::uint32_t, std::array<char, 6>> leaving;  // cube -> (axis, side)
+      for (const std::size_t end = mesh.tets().size(); checked < end; ++checked) {
+        const detail::KuhnMesh::Tet& t = mesh.tets()[checked];
+        if (!t.leaf) continue;
+        for (int f = 0; f < 4; ++f) {
+          int count = 0;
+          for (int x = 0; x < 4; ++x) count += x != f && w[t.v[x]] > 0;
+          detail::KuhnMesh::Coord n3;
+          if (count == 0 || count == 3 || !mesh.across_cube_face(t, f, n3)) continue;
+          const detail::KuhnMesh::Coord& c = mesh.cube(t.cube);
+          for (int axis = 0; axis < 3; ++axis)
+            if (n3[axis] != c[axis]) leaving[t.cube][std::size_t(2 * axis + (n3[axis] > c[axis]))] = 1;
+        }
       }
-      add_corners(end);
-      first = end;
+      for (const auto& [cube, sides] : leaving)
+        for (int s6 = 0; s6 < 6; ++s6) {
+          if (!sides[std::size_t(s6)]) continue;
+          detail::KuhnMesh::Coord n3 = mesh.cube(cube);
+          n3[s6 / 2] += s6 % 2 ? 1 : -1;
+          if (n3[s6 / 2] < 0 || n3[s6 / 2] >= limit) continue;
+          if (mesh.add_cube(n3[0], n3[1], n3[2]).second) cells.push_back({n3[0], n3[1], n3[2], {}});
+        }
+      evaluate_new_corners();
     }
   };
-  close(0);
+  close();
   r.seconds_winding = seconds_since(t0);
 
   // Phase 2 (§3.2): the boundary of the inside corners, vertices on facets.
@@ -2140,7 +2195,10 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   std::vector<OutVertex> vertices;
   std::vector<Tri> tris;
   const bool any_inside = std::any_of(w.begin(), w.end(), [](double x) { return x > 0; });
-  if (any_inside) Extractor(f, g, cells, corner_id, w, r).run(vertices, tris);
+  if (any_inside) {
+    Extractor(f, g, cells, mesh, w, r).run(vertices, tris);
+    r.beads_dropped = drop_beads(f, vertices, tris, g.h);
+  }
   // Parts thinner than a cell (fins, thin walls) fall between the corners.
   // Facets the surface does not come within a cell of, and that lie outside
   // it, are wrapped in a shell too, and the surface extracted again: nothing
@@ -2176,15 +2234,182 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
       to_sheets = std::make_unique<detail::SurfaceDistance>(wrapped);
       r.shell = shell;
       tbb::parallel_for(std::size_t(0), w.size(), [&](std::size_t c) { w[c] = phi(c); });
-      close(0);
+      checked = 0;  // every leaf again: corners have changed sides
+      close();
       vertices.clear();
       tris.clear();
       r.crossed_edges = r.facet_crossings = r.interpolated = 0;
-      Extractor(f, g, cells, corner_id, w, r).run(vertices, tris);
+      Extractor(f, g, cells, mesh, w, r).run(vertices, tris);
+      r.beads_dropped = drop_beads(f, vertices, tris, g.h);
     }
   }
+  // §5, "a feature-based refinement is needed on the generated overlay
+  // grid": leaves that miss the surface (see `missing` below: the tip of a
+  // spike, a fin or wall thinner than them, an acute edge, the rim of a
+  // hole) are bisected, down to `halvings` halvings of the cell, and kept
+  // conforming. Only facets that bound the volume count (outside in front,
+  // inside behind; not the walls inside an overlap, nor sheets and stray
+  // copies); the cubes' facet lists serve their tetrahedra. Refinement comes
+  // after the cell-thick shell: what that shell already holds within a cell
+  // (plates and walls thinner than a cell, all of whose corners the coarse
+  // surface missed) needs no finer cells.
+  const auto t_refine = std::chrono::steady_clock::now();
+  if (r.halvings > 0 && any_inside) {
+    if (obs) obs->stage("refining the grid");
+    std::vector<char> faces_out(f.tris.size(), 0);
+    std::vector<Point3d> unit_normal(f.tris.size());
+    tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
+      if (!f.sheet.empty() && f.sheet[t]) return;
+      const Point3d &a = f.points[f.tris[t][0]], &b = f.points[f.tris[t][1]], &c = f.points[f.tris[t][2]];
+      const Point3d n = normal(a, b, c);
+      const double len = std::sqrt(dot(n, n));
+      if (!(len > 0)) return;
+      for (int k = 0; k < 3; ++k) unit_normal[t][k] = n[k] / len;
+      Point3d front, back;
+      for (int k = 0; k < 3; ++k) {
+        front[k] = (a[k] + b[k] + c[k]) / 3 + 0.02 * g.h * unit_normal[t][k];
+        back[k] = (a[k] + b[k] + c[k]) / 3 - 0.02 * g.h * unit_normal[t][k];
+      }
+      faces_out[t] = winding(front) < 0.5 && winding(back) > 0.5;
+    });
+    // The facets' open edges (used once): a leaf where a facet ends at one
+    // holds the rim of a hole.
+    std::unordered_map<std::uint64_t, int> edge_uses;
+    auto undirected = [](const Tri& t, int k) {
+      return edge_key(std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3]));
+    };
+    for (const Tri& t : f.tris)
+      for (int k = 0; k < 3; ++k) ++edge_uses[undirected(t, k)];
+    auto open_edge = [&](const Tri& t, int k) { return edge_uses.at(undirected(t, k)) == 1; };
+    // A part thinner than a leaf: two facets inside it facing away from each
+    // other (normals more than 120 degrees apart); a cube holding no such
+    // pair cannot hold one, nor a rim without a facet with an open edge.
+    constexpr double kThin = -0.5;
+    std::vector<char> cube_thin(cells.size(), 0), cube_rim(cells.size(), 0);
+    tbb::parallel_for(std::size_t(0), cells.size(), [&](std::size_t c) {
+      const auto& list = cells[c].tris;
+      for (std::size_t a = 0; a < list.size(); ++a) {
+        if (!faces_out[list[a]]) continue;
+        for (int k = 0; k < 3 && !cube_rim[c]; ++k) cube_rim[c] = open_edge(f.tris[list[a]], k);
+        for (std::size_t b = a + 1; b < list.size() && !cube_thin[c]; ++b)
+          cube_thin[c] = faces_out[list[b]] && dot(unit_normal[list[a]], unit_normal[list[b]]) < kThin;
+      }
+    });
+    // The facets a leaf misses (none: it misses nothing): two facets more than
+    // 120 degrees apart in it (both sides of a part thinner than the leaf, or
+    // the edge of an acute wedge); or, with all corners outside, a facet that
+    // ends at an open edge in it (the rim of a hole). Right-angle and gentler
+    // edges clipping a leaf are left to sharpening (below): refining them
+    // costs much and moves the surface little.
+    auto missing = [&](const detail::KuhnMesh::Tet& t, bool mixed) {
+      std::vector<std::uint32_t> meet;
+      const IK::Tetrahedron_3 tet(ipoint(g.at(mesh.corner(t.v[0]))), ipoint(g.at(mesh.corner(t.v[1]))),
+                                  ipoint(g.at(mesh.corner(t.v[2]))), ipoint(g.at(mesh.corner(t.v[3]))));
+      // How deep the missed part can reach: a wedge of interior angle a
+      // hides a tip up to size / (2 sin(a / 2)) long in a leaf of that size;
+      // a rim, up to the size. Refined while that exceeds half a cell.
+      std::int64_t longest = 0;  // squared, fine lattice units
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b) {
+          std::int64_t l = 0;
+          for (int x = 0; x < 3; ++x) {
+            const std::int64_t d = mesh.corner(t.v[a])[x] - mesh.corner(t.v[b])[x];
+            l += d * d;
+          }
+          longest = std::max(longest, l);
+        }
+      const double size = std::sqrt(double(longest)) * g.step, budget = 0.5 * g.h;
+      for (std::uint32_t ft : cells[t.cube].tris) {
+        if (!faces_out[ft]) continue;
+        const Tri& tr = f.tris[ft];
+        if (!CGAL::do_intersect(tet, IK::Triangle_3(ipoint(f.points[tr[0]]), ipoint(f.points[tr[1]]),
+                                                    ipoint(f.points[tr[2]]))))
+          continue;
+        meet.push_back(ft);
+        for (std::size_t o = 0; o + 1 < meet.size(); ++o) {
+          const double d = dot(unit_normal[ft], unit_normal[meet[o]]);  // cos of the bend, -cos a
+          if (d < kThin && size > budget * std::sqrt(2 * std::max(0.0, 1 + d))) return meet;
+        }
+      }
+      if (!mixed && meet.size() == 1 && size > budget) {
+        const Tri& tr = f.tris[meet[0]];
+        for (int k = 0; k < 3; ++k)
+          if (open_edge(tr, k) &&
+              CGAL::do_intersect(tet, IK::Segment_3(ipoint(f.points[tr[k]]), ipoint(f.points[tr[(k + 1) % 3]]))))
+            return meet;
+      }
+      meet.clear();
+      return meet;
+    };
+    // Rounds: each looks at the leaves the last one made. Leaves at the
+    // finest level that still miss the surface are kept for below.
+    std::vector<std::pair<std::uint32_t, std::vector<std::uint32_t>>> finest_missing;
+    std::size_t from = 0;
+    for (;;) {
+      std::vector<std::uint32_t> candidates;
+      for (std::size_t id = from; id < mesh.tets().size(); ++id) {
+        const detail::KuhnMesh::Tet& t = mesh.tets()[id];
+        if (!t.leaf || t.cube >= cube_thin.size()) continue;  // cubes added to close the surface hold no facets
+        const int inside = (w[t.v[0]] > 0) + (w[t.v[1]] > 0) + (w[t.v[2]] > 0) + (w[t.v[3]] > 0);
+        if ((inside == 0 && cube_rim[t.cube]) || (inside < 4 && cube_thin[t.cube]))
+          candidates.push_back(std::uint32_t(id));
+      }
+      from = mesh.tets().size();
+      std::vector<std::vector<std::uint32_t>> missed(candidates.size());
+      tbb::parallel_for(std::size_t(0), candidates.size(), [&](std::size_t i) {
+        const detail::KuhnMesh::Tet& t = mesh.tets()[candidates[i]];
+        missed[i] = missing(t, w[t.v[0]] > 0 || w[t.v[1]] > 0 || w[t.v[2]] > 0 || w[t.v[3]] > 0);
+      });
+      std::vector<std::uint32_t> marked;
+      for (std::size_t i = 0; i < candidates.size(); ++i) {
+        if (missed[i].empty()) continue;
+        if (mesh.tets()[candidates[i]].level < mesh.max_level()) marked.push_back(candidates[i]);
+        else finest_missing.emplace_back(candidates[i], std::move(missed[i]));
+      }
+      if (marked.empty()) break;
+      r.refined_tets += marked.size();
+      r.bisections += mesh.bisect(marked);
+      evaluate_new_corners();
+      close();
+    }
+    // What is thinner than the finest leaves (a wall, the tip of a spike)
+    // would come out as isolated beads, or not at all: there, a corner within
+    // one finest step of the facets its leaf misses counts as inside (a
+    // shell one step thick, as parts thinner than a cell got one a cell
+    // thick above), so the part stays one piece.
+    for (const auto& [id, facets] : finest_missing)
+      for (std::uint32_t c : mesh.tets()[id].v) {
+        const Point3d q = g.at(mesh.corner(c));
+        double d2 = HUGE_VAL;
+        for (std::uint32_t ft : facets)
+          d2 = std::min(d2, detail::squared_distance_to_triangle(q, f.points[f.tris[ft][0]], f.points[f.tris[ft][1]],
+                                                                  f.points[f.tris[ft][2]]));
+        const double thick = 0.5 * (g.step - std::sqrt(d2)) / g.step;
+        if (thick > w[c]) {
+          w[c] = thick;
+          ++r.thickened_corners;
+        }
+      }
+    if (r.thickened_corners) {
+      checked = 0;  // corners have changed sides
+      close();
+    }
+    for (const detail::KuhnMesh::Tet& t : mesh.tets())
+      if (t.leaf) r.finest_level = std::max(r.finest_level, int(t.level));
+    if (r.refined_tets || r.thickened_corners) {
+      if (obs) obs->stage("extracting");
+      vertices.clear();
+      tris.clear();
+      r.crossed_edges = r.facet_crossings = r.interpolated = 0;
+      Extractor(f, g, cells, mesh, w, r).run(vertices, tris);
+      r.beads_dropped = drop_beads(f, vertices, tris, g.h);
+    }
+  }
+  r.seconds_refine = seconds_since(t_refine);
   r.closure_cells = cells.size() - r.boundary_cells;
-  r.corners = corner_at.size();
+  r.corners = mesh.corner_count();
+  r.leaf_tets = std::size_t(std::count_if(mesh.tets().begin(), mesh.tets().end(),
+                                           [](const detail::KuhnMesh::Tet& t) { return t.leaf; }));
   r.inside_corners = std::size_t(std::count_if(w.begin(), w.end(), [](double x) { return x > 0; }));
   r.volume = r.inside_corners > 0;
   if (!r.volume) {
@@ -2205,7 +2430,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     r.kept_patches = kept.patches;
     r.patches_given_up = kept.given_up;
   }
-  r.seconds_extract = seconds_since(t0);
+  r.seconds_extract = seconds_since(t0) - r.seconds_refine;
 
   t0 = std::chrono::steady_clock::now();
   if (options.simplify) {

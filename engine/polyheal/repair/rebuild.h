@@ -4,9 +4,15 @@
 //
 // Phase 1 (§3.1): an octree over the bounding box is refined only where its
 // cells meet the facets (exact triangle-box tests on the file's doubles),
-// down to one uniform cell size (§3.1.3). Cell edges are intersected with the
-// facets exactly (orientation determinants; the crossing parameter is an
-// Epeck number), and each crossing keeps its facet and group (§3.1.2).
+// down to one cell size (§3.1.3). Each cell is split into its six Kuhn
+// tetrahedra, and — §5's "feature-based refinement" — tetrahedra that miss
+// the surface (both sides of a part thinner than themselves, or of an acute
+// edge: facets more than 120 degrees apart; with all corners outside, the
+// rim of a hole) are bisected further, conforming (detail/kuhn_mesh.h), down
+// to `refine` halvings of the cell. Tetrahedron
+// edges are intersected with the facets exactly (orientation determinants;
+// the crossing parameter is an Epeck number), and each crossing keeps its
+// facet and group (§3.1.2).
 //
 // Phase 2 (§3.2) replaces the paper's heuristics for joining edge
 // intersections (§3.2.1 Fig. 6-7, §3.2.2 Fig. 8, §3.2.3 Fig. 9, §3.2.5 hole
@@ -15,10 +21,11 @@
 // Barill et al. 2018). The winding number is ~1 inside and ~0 outside even
 // where the soup has gaps, holes and overlaps: a gap or hole is spanned by
 // the smooth 1/2 level, an overlap counts once. The surface is then the
-// boundary of the inside corners in the grid's Kuhn triangulation (each cube
-// in six tetrahedra sharing its main diagonal, marching tetrahedra), so it is
-// closed, 2-manifold and oriented by construction — there are no ambiguous
-// faces to resolve (§3.2.1), no single-intersection faces (§3.2.2) and no
+// boundary of the inside corners in the grid's conforming tetrahedra (each
+// cube's six Kuhn tetrahedra sharing its main diagonal, some bisected;
+// marching tetrahedra), so it is closed, 2-manifold and oriented by
+// construction — there are no ambiguous faces to resolve (§3.2.1), no
+// single-intersection faces (§3.2.2) and no
 // open loops (§3.2.3) — and, its vertices lying strictly inside distinct
 // tetrahedron edges, free of self-intersections. A vertex sits at the facet
 // crossing of its grid edge where there is one (the crossing leaving the
@@ -62,6 +69,7 @@ namespace polyheal {
 struct RebuildOptions {
   double cell = -1;            // cell size, model units; <= 0: see cell_ratio
   double cell_ratio = -1;      // cell size as a fraction of the bbox diagonal; <= 0: the default rule
+  int refine = 2;              // halvings of the cell where the grid misses the surface (0: uniform cells)
   double feature_angle = 30;   // degrees: grouping output faces when the input has no groups
   bool keep_clean = true;      // a certified clean input is returned unchanged
   bool keep_regions = true;    // keep input facets far from every defect, zipped to the grid surface
@@ -108,6 +116,12 @@ struct RebuildReport {
   std::size_t octree_nodes = 0;         // cells visited while refining
   std::size_t boundary_cells = 0;       // leaf cells meeting the facets
   std::size_t closure_cells = 0;        // cells added where the 1/2 level leaves the facets (gaps, holes)
+  int halvings = 0;                     // how far the cell may be halved (options.refine, within the lattice)
+  std::size_t refined_tets = 0;         // tetrahedra found missing the surface, and bisected
+  std::size_t bisections = 0;           // ... with those conformity needed
+  std::size_t leaf_tets = 0;            // tetrahedra of the final grid
+  int finest_level = 0;                 // deepest bisection level (3 levels halve the cell)
+  std::size_t thickened_corners = 0;    // corners within a finest step of a part thinner than that: inside
   std::size_t corners = 0, inside_corners = 0;
   std::size_t crossed_edges = 0;        // grid edges whose corners differ
   std::size_t facet_crossings = 0;      // ... with a vertex on a facet
@@ -115,6 +129,7 @@ struct RebuildReport {
   // output
   bool unchanged = false;               // input was already clean
   bool volume = false;                  // some corner is inside
+  std::size_t beads_dropped = 0;        // tiny extracted components another component already stands for
   std::size_t extracted_faces = 0;      // before simplification
   std::size_t kept_faces = 0;           // input facets kept as they are (clean regions)
   std::size_t kept_patches = 0;         // ... in this many patches, zipped to the grid surface
@@ -139,7 +154,7 @@ struct RebuildReport {
   double lost_area_fraction = 0;
   std::vector<Region> lost_regions;  // each component lost whole: its faces and where
   // seconds
-  double seconds_prepare = 0, seconds_octree = 0, seconds_winding = 0, seconds_extract = 0,
+  double seconds_prepare = 0, seconds_octree = 0, seconds_winding = 0, seconds_extract = 0, seconds_refine = 0,
          seconds_simplify = 0, seconds_certify = 0;
 };
 
