@@ -304,9 +304,9 @@ if want rebuild; then
     [ "${lost:-0}" -gt 0 ] && v="$v, $lost components lost"
     [ "$v" = certified ] && rb_ours=$((rb_ours + 1))
     out_faces=$(sed -n '/"output_mesh"/,/}/p' "$work/rb.json" | json_num faces /dev/stdin)
-    read -r io oi _ < <("$b/polyheal_gen" distance "$f" "$work/rb_ours.off" 2>/dev/null || echo "- - -")
+    read -r io oi _ ioo < <("$b/polyheal_gen" distance "$f" "$work/rb_ours.off" 2>/dev/null || echo "- - - -")
     rel=$(awk -v c="$cell" -v d="$diag" 'BEGIN{printf "%.3g", (d > 0 ? c / d : 0.01)}')
-    ours="$v | $out_faces | $(awk -v a="$io" -v b="$oi" -v d="$diag" 'BEGIN{printf "%.2g%% / %.2g%%", 100 * a / d, 100 * b / d}') | $ours_s s, $((ours_kb / 1024)) MB | $(tetgen_verdict "$work/rb_ours.off")"
+    ours="$v | $out_faces | $(awk -v a="$io" -v o="$ioo" -v b="$oi" -v d="$diag" 'BEGIN{printf "%.2g%% (%.2g%%) / %.2g%%", 100 * a / d, 100 * o / d, 100 * b / d}') | $ours_s s, $((ours_kb / 1024)) MB | $(tetgen_verdict "$work/rb_ours.off")"
     # alpha_wrap_3 at alpha = our cell (relative to the diagonal), offset alpha / 30 (CGAL's example)
     peer="crashed or timed out | | | |"
     timed 1200 "$work/peer.txt" /dev/null "$b/cgal_rebuild_peer" "$f" "$work/rb_cgal.off" "$rel" \
@@ -317,8 +317,8 @@ if want rebuild; then
       cg_wall=$wall_s; cg_kb=$wall_kb
       cv=$(verdict "$work/rb_cgal.off")
       [ "$cv" = certified ] && rb_cgal=$((rb_cgal + 1))
-      read -r cio coi _ < <("$b/polyheal_gen" distance "$f" "$work/rb_cgal.off" 2>/dev/null || echo "- - -")
-      peer="$cv | $cg_faces | $(awk -v a="$cio" -v b="$coi" -v d="$diag" 'BEGIN{printf "%.2g%% / %.2g%%", 100 * a / d, 100 * b / d}') | $cg_wall s ($cg_s s), $((cg_kb / 1024)) MB | $(tetgen_verdict "$work/rb_cgal.off")"
+      read -r cio coi _ cioo < <("$b/polyheal_gen" distance "$f" "$work/rb_cgal.off" 2>/dev/null || echo "- - - -")
+      peer="$cv | $cg_faces | $(awk -v a="$cio" -v o="$cioo" -v b="$coi" -v d="$diag" 'BEGIN{printf "%.2g%% (%.2g%%) / %.2g%%", 100 * a / d, 100 * o / d, 100 * b / d}') | $cg_wall s ($cg_s s), $((cg_kb / 1024)) MB | $(tetgen_verdict "$work/rb_cgal.off")"
       awk -v a="$ours_s" -v c="$cg_wall" 'BEGIN{exit !(c >= 2 * a)}' && rb_faster=$((rb_faster + 1))
       [ "$out_faces" -lt "$cg_faces" ] && rb_fewer=$((rb_fewer + 1))
     fi
@@ -376,7 +376,7 @@ if want repair; then
       cg_wall=$wall_s; cg_kb=$wall_kb
       cv=$(verdict "$work/rp_cgal.off")
       [ "$cv" = certified ] && rp_cgal=$((rp_cgal + 1))
-      read -r cio coi cdiag < <("$b/polyheal_gen" distance "$f" "$work/rp_cgal.off" 2>/dev/null || echo "- - -")
+      read -r cio coi cdiag _ < <("$b/polyheal_gen" distance "$f" "$work/rp_cgal.off" 2>/dev/null || echo "- - - -")
       ch=$(awk -v a="$cio" -v c="$coi" -v d="$cdiag" 'BEGIN{ if (d + 0 > 0 && a != "-" && a >= 0 && c >= 0) printf "%.4g", (a > c ? a : c) / d; else print "-" }')
       [ "$ch" != "-" ] && rp_hc+="$ch"$'\n'
       ctg=$(tetgen_verdict "$work/rp_cgal.off" -pQ)
@@ -548,18 +548,21 @@ Dirty soups: the dirty box fixture (separate patches with gaps, overlaps, T-junc
 a hole), the self-intersecting thin-walled tubes, and every corpus mesh of category c
 (holes, gaps, misoriented and duplicated faces, open and non-manifold soups).
 polyheal at its default cell (1% of the bbox diagonal, or 1.25x the largest gap
-found); `alpha_wrap_3` with alpha = that cell and offset = alpha / 30 (CGAL's
-example), so both work at the same resolution. "verdict": `polyheal check` on each
+found) and refinement (`--refine 2`: tetrahedra that miss the surface bisected down
+to a quarter cell); `alpha_wrap_3` with alpha = that cell and offset = alpha / 30
+(CGAL's example), so both work at the same resolution. "verdict": `polyheal check` on each
 written file (CERTIFIED CLEAN, or what is left; for polyheal also input components
-the output does not represent). "in→out / out→in": the one-sided distances from the
-input to the output (detail lost) and back (gap and hole fills; for alpha_wrap_3 the
-offset shell), % of the bbox diagonal, measured by the same code for both
+the output does not represent). "in→out (outside) / out→in": the one-sided distances
+from the input to the output (detail lost; in brackets over the input outside the
+output's volume only, i.e. without the inner walls and overlaps a volume removes) and
+back (gap and hole fills; for alpha_wrap_3 the offset shell), % of the bbox diagonal,
+measured by the same code for both
 (`polyheal_gen distance`, bounded error 1e-4 of the diagonal). Time and memory: the
 whole process (polyheal: read, rebuild, write, read back, certify; CGAL's peer: read,
 wrap, write; its function alone in brackets). "TetGen": does `tetgen -pYQ` mesh the
 output (— when not closed). One run each.
 
-| input | faces | cell (rel.) | polyheal verdict | faces out | in→out / out→in | polyheal time | TetGen | alpha_wrap_3 verdict | faces out | in→out / out→in | CGAL time | TetGen on CGAL's |
+| input | faces | cell (rel.) | polyheal verdict | faces out | in→out (outside) / out→in | polyheal time | TetGen | alpha_wrap_3 verdict | faces out | in→out (outside) / out→in | CGAL time | TetGen on CGAL's |
 | --- | ---: | ---: | --- | ---: | ---: | ---: | --- | --- | ---: | ---: | ---: | --- |
 TAIL
   printf "%s" "$rb_rows"

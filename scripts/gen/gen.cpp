@@ -8,7 +8,8 @@
 //   polyheal_gen torus OUT                    closed torus R=3, r=1
 //   polyheal_gen offset --distance D IN OUT   raw offset along area-weighted vertex normals
 //   polyheal_gen dirty-box OUT                box of separate patches: gap, overlap, T-junctions, hole
-//   polyheal_gen distance A B                 one-sided distances A->B and B->A (the reports' measure)
+//   polyheal_gen distance A B                 one-sided distances A->B and B->A (the reports' measure), and
+//                                             A->B over the part of A outside B's volume
 //
 // Output format from the extension; files are overwritten.
 #include <algorithm>
@@ -22,6 +23,7 @@
 #include "polyheal/io/read.h"
 #include "polyheal/io/write.h"
 #include "polyheal/repair/detail/distance.h"
+#include "polyheal/repair/rebuild.h"
 
 using namespace polyheal;
 
@@ -300,7 +302,7 @@ Soup narrow_clearance(std::size_t faces, int tubes) {
                "       polyheal_gen offset --distance D IN OUT\n"
                "       polyheal_gen dirty-box OUT\n"
                "       polyheal_gen narrow-clearance [--faces N] [--tubes K] OUT\n"
-               "       polyheal_gen distance A B   (prints: A->B B->A diagonal-of-A, bounded error 1e-4 diagonal)\n");
+               "       polyheal_gen distance A B   (prints: A->B B->A diagonal-of-A A->B-outside-B, bounded error 1e-4 diagonal)\n");
   std::exit(2);
 }
 
@@ -334,7 +336,10 @@ int main(int argc, char** argv) {
       const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                                     (hi[2] - lo[2]) * (hi[2] - lo[2]));
       const std::array<double, 2> d = detail::one_sided_distances(a, b, 1e-4 * diag);
-      std::printf("%.6g %.6g %.6g\n", d[0], d[1], diag);
+      // A to B over the part of A outside B's volume (B's generalised winding
+      // number at most 1/2): what B loses of A, its removed interiors aside.
+      const double outside = measure_loss(a, b, 2e-3 * diag, true).outside_distance;
+      std::printf("%.6g %.6g %.6g %.6g\n", d[0], d[1], diag, outside);
       return 0;
     }
     Soup s;
