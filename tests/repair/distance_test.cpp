@@ -317,3 +317,19 @@ TEST_CASE("distance: a wall removed inside a union counts as removed, not as mov
   // without skipping, the wall's centre is half a unit from the union's surface
   CHECK(detail::one_sided_distances(cubes, united, error)[0] >= 0.5 - 1e-12);
 }
+
+TEST_CASE("distance: input wholly inside the other surface, just under it all over, counts nothing", "[repair][distance]") {
+  // A sphere just inside a slightly larger one (the same tessellation): every
+  // piece of the inner one is skipped, and crosses nothing of the outer one,
+  // so it is skipped whole. Bisected instead until its pieces were smaller
+  // than the error bound, it ran out of splits and counted what was left with
+  // its size (a rebuilt chair inside its shell "lost" 3% of the diagonal).
+  Soup outer = test::icosphere(1.0, 3);
+  for (Point3d& p : outer.points)
+    for (double& x : p) x *= 1.01;
+  const Soup inner = test::icosphere(1.0, 3);
+  auto inside = [](const Point3d& p) { return p[0] * p[0] + p[1] * p[1] + p[2] * p[2] < 1.005 * 1.005; };
+  const double error = 1e-4;
+  CHECK(detail::one_sided_distance_skipping(inner, outer, error, inside) == 0);
+  CHECK(detail::one_sided_distances(inner, outer, error)[0] > 0.005);  // the surfaces are apart
+}

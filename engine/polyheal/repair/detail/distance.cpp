@@ -5,6 +5,7 @@
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/intersections.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_sort.h>
@@ -224,11 +225,16 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
       // corners are farther than that edge.
       if (piece.skipped[0] && piece.skipped[1] && piece.skipped[2]) {
         if (edge[k] <= bound + error_bound || *std::min_element(piece.d.begin(), piece.d.end()) > edge[k]) continue;
+        // skip changes only where the piece crosses `to`: crossing nothing,
+        // it is skipped whole.
+        if (!to.meets(piece.p)) continue;
         // Input running just inside `to` over a large area would take pieces
         // of the error bound's size: past a budget, such a piece counts with
-        // its bound (the result then over-estimates, never under-estimates).
+        // a bound on all its points, the smaller of its longest edge and its
+        // convexity bound (the result then over-estimates, never
+        // under-estimates).
         if (++skipped_splits > kSkippedSplitBudget) {
-          bound = std::max(bound, edge[k]);
+          bound = std::max(bound, std::min(edge[k], upper_bound(piece)));
           continue;
         }
       }
@@ -611,6 +617,20 @@ bool SurfaceDistance::any_within(const Point3d& p, double r2, std::size_t& hint)
 
 std::vector<std::size_t> SurfaceDistance::triangles_near(const Point3d& lo, const Point3d& hi) const {
   return impl_->bvh->meeting(lo, hi);
+}
+
+bool SurfaceDistance::meets(const std::array<Point3d, 3>& piece) const {
+  const K::Triangle_3 t(point(piece[0]), point(piece[1]), point(piece[2]));
+  if (t.is_degenerate()) return true;  // not decided here: "may meet"
+  Point3d lo = piece[0], hi = piece[0];
+  for (const Point3d& p : piece)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], p[k]);
+      hi[k] = std::max(hi[k], p[k]);
+    }
+  for (std::size_t s : triangles_near(lo, hi))
+    if (!impl_->degenerate[s] && CGAL::do_intersect(t, impl_->triangles[s])) return true;
+  return false;
 }
 
 double SurfaceDistance::ray_distance(const Point3d& origin, const Point3d& direction,

@@ -43,6 +43,9 @@ class SurfaceDistance {
   /// triangle index, or anything out of range) is tried first and becomes
   /// the triangle found: neighbouring queries mostly share it.
   bool any_within(const Point3d& p, double r2, std::size_t& hint) const;
+  /// Does triangle `piece` meet a (non-degenerate) surface triangle?
+  /// Decided exactly on the doubles; true for a degenerate piece (not decided).
+  bool meets(const std::array<Point3d, 3>& piece) const;
   /// Indices of the surface triangles whose bounding boxes meet the box
   /// [lo, hi] (candidates for squared_distance_to).
   std::vector<std::size_t> triangles_near(const Point3d& lo, const Point3d& hi) const;
