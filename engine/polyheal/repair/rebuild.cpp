@@ -2065,7 +2065,8 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   if (r.depth >= kBits - 1)
     throw UnsupportedInput("the overlay grid would need 2^" + std::to_string(r.depth) +
                            " cells along an axis; choose a larger --cell");
-  r.halvings = std::clamp(options.refine, 0, kBits - 1 - r.depth);  // the fine lattice fits kBits
+  // At most 8 halvings (detail::KuhnMesh), and the fine lattice fits kBits.
+  r.halvings = std::clamp(options.refine, 0, std::min(8, kBits - 1 - r.depth));
   g.step = std::ldexp(g.h, -r.halvings);
   r.seconds_prepare = seconds_since(t0);
 
