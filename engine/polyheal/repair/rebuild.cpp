@@ -1703,8 +1703,9 @@ class BoundedDecimation {
   /// feature angle moves onto their intersection line (its nearest point),
   /// or, with a third independent plane, onto their common point — exact
   /// constructions (Epeck), rounded once — when that is within `reach`, its
-  /// faces stay non-degenerate, turn less than 75 degrees, and intersect
-  /// nothing (the oracle's local query). Cube-marching chamfers become edges.
+  /// faces stay non-degenerate, turn less than 75 degrees, fold onto no
+  /// neighbour (normals more than 179 degrees apart) and intersect nothing
+  /// (the oracle's local query). Cube-marching chamfers become edges.
   /// `input`: the facets of `f`. The edge or corner must be one of the
   /// input's: the target lies on it.
   std::size_t sharpen(const Facets& f, const detail::SurfaceDistance& input,
@@ -1768,6 +1769,7 @@ class BoundedDecimation {
       if (input.squared_distance(x) > on_input * on_input) continue;
       std::vector<face_descriptor> star;
       std::vector<std::array<vertex_descriptor, 3>> proposed;
+      std::vector<Point3d> ring;  // the moved faces' normals, round v
       bool ok = true;
       for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
         const vertex_descriptor p = mesh_.source(g), q = mesh_.target(mesh_.next(g));
@@ -1775,13 +1777,16 @@ class BoundedDecimation {
         if (dot(n_old, n_new) <= 0.25 * std::sqrt(dot(n_old, n_old) * dot(n_new, n_new)) ||
             CGAL::collinear(InputKernel::Point_3(at(p)[0], at(p)[1], at(p)[2]),
                             InputKernel::Point_3(x[0], x[1], x[2]),
-                            InputKernel::Point_3(at(q)[0], at(q)[1], at(q)[2]))) {
+                            InputKernel::Point_3(at(q)[0], at(q)[1], at(q)[2])) ||
+            folded(n_new, normal_across(mesh_.next(mesh_.next(g))))) {
           ok = false;
           break;
         }
+        ring.push_back(n_new);
         star.push_back(mesh_.face(g));
         proposed.push_back({p, v, q});
       }
+      for (std::size_t i = 0; ok && i < ring.size(); ++i) ok = !folded(ring[i], ring[(i + 1) % ring.size()]);
       if (!ok) continue;
       const Point before = mesh_.point(v);
       mesh_.point(v) = Point(x[0], x[1], x[2]);
@@ -1817,6 +1822,19 @@ class BoundedDecimation {
  private:
   static constexpr std::size_t kMaxValence = 24;
 
+  /// Normals more than 179 degrees apart: the faces fold onto each other
+  /// across their edge (TetGen refuses such "nearly self-intersecting"
+  /// facets; keep_clean_regions holds its strips to the same bound).
+  static bool folded(const Point3d& n, const Point3d& m) {
+    return dot(n, m) < std::cos(179 * M_PI / 180) * std::sqrt(dot(n, n) * dot(m, m));
+  }
+  /// The normal of the face across halfedge h (zero on a border).
+  Point3d normal_across(halfedge_descriptor h) const {
+    const halfedge_descriptor o = mesh_.opposite(h);
+    if (mesh_.is_border(o)) return {0, 0, 0};
+    return normal(at(mesh_.source(o)), at(mesh_.target(o)), at(mesh_.target(mesh_.next(o))));
+  }
+
   struct Candidate {
     halfedge_descriptor h;  // v -> u
     double error = 0, quality = 0;
@@ -1845,19 +1863,44 @@ class BoundedDecimation {
       c.quality = HUGE_VAL;
       double d2 = HUGE_VAL;
       bool ok = true;
+      // Folds: each new face against the face outside the star across (b, a);
+      // the new faces against each other round u (faces next to each other
+      // round v, neither removed); and the faces beyond the two removed
+      // (across their edges at u) against the fan faces that inherit those
+      // edges, at the vertex x.
+      std::vector<std::pair<vertex_descriptor, Point3d>> beyond;
+      std::vector<Point3d> ring;   // new normals round v (zero for the removed faces)
+      std::vector<char> removed;
       for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
         const vertex_descriptor a = mesh_.source(g), b = mesh_.target(mesh_.next(g));
-        if (a == u || b == u) continue;  // the two faces the collapse removes
+        if (a == u || b == u) {  // one of the two faces the collapse removes
+          beyond.push_back({a == u ? b : a, normal_across(mesh_.next(mesh_.next(g)))});
+          ring.push_back({0, 0, 0});
+          removed.push_back(1);
+          continue;
+        }
         const Point3d &pa = at(a), &pu = at(u), &pb = at(b);
         const Point3d n_old = normal(pa, at(v), pb), n_new = normal(pa, pu, pb);
         if (dot(n_old, n_new) <= 0.5 * std::sqrt(dot(n_old, n_old) * dot(n_new, n_new)) ||
-            CGAL::collinear(mesh_.point(a), mesh_.point(u), mesh_.point(b))) {
+            CGAL::collinear(mesh_.point(a), mesh_.point(u), mesh_.point(b)) ||
+            folded(n_new, normal_across(mesh_.next(mesh_.next(g))))) {
           ok = false;
           break;
         }
+        ring.push_back(n_new);
+        removed.push_back(0);
         c.quality = std::min(c.quality, min_angle_quality(pa, pu, pb));
         d2 = std::min(d2, detail::squared_distance_to_triangle(at(v), pa, pu, pb));
         c.proposed.push_back({a, u, b});
+      }
+      for (std::size_t i = 0; ok && i < ring.size(); ++i) {
+        const std::size_t j = (i + 1) % ring.size();
+        ok = removed[i] || removed[j] || !folded(ring[i], ring[j]);
+      }
+      for (std::size_t i = 0; ok && i < c.proposed.size(); ++i) {
+        const Point3d n = normal(at(c.proposed[i][0]), at(u), at(c.proposed[i][2]));
+        for (const auto& [x, m] : beyond)
+          if ((x == c.proposed[i][0] || x == c.proposed[i][2]) && folded(n, m)) ok = false;
       }
       if (!ok || c.proposed.empty()) continue;
       // Old star to new fan: the distance to the fan is convex on each old
