@@ -105,6 +105,35 @@ struct Facets {
   std::vector<char> sheet;          // per triangle: bounds no volume (empty: none is)
 };
 
+/// Each facet's unit normal (zero for one whose normal vanishes in doubles;
+/// a measurement).
+std::vector<Point3d> unit_normals(const Facets& f) {
+  std::vector<Point3d> unit(f.tris.size(), Point3d{0, 0, 0});
+  for (std::size_t t = 0; t < f.tris.size(); ++t) {
+    const Point3d n = normal(f.points[f.tris[t][0]], f.points[f.tris[t][1]], f.points[f.tris[t][2]]);
+    const double l = std::sqrt(dot(n, n));
+    if (l > 0) unit[t] = {n[0] / l, n[1] / l, n[2] / l};
+  }
+  return unit;
+}
+
+/// The points `d` in front of and behind facet t's centroid along its normal
+/// (where the winding number tells what the facet bounds); false when the
+/// normal vanishes in doubles.
+bool beside(const Facets& f, std::size_t t, double d, Point3d& front, Point3d& back) {
+  const Point3d &a = f.points[f.tris[t][0]], &b = f.points[f.tris[t][1]], &c = f.points[f.tris[t][2]];
+  const Point3d n = normal(a, b, c);
+  const double len = std::sqrt(dot(n, n));
+  if (!(len > 0)) return false;
+  const double e = d / len;
+  for (int k = 0; k < 3; ++k) {
+    const double m = (a[k] + b[k] + c[k]) / 3;
+    front[k] = m + e * n[k];
+    back[k] = m - e * n[k];
+  }
+  return true;
+}
+
 Facets prepare(const Soup& input, RebuildReport& r) {
   const Weld weld = weld_identical_points(input.points);
   Facets f;
@@ -801,16 +830,8 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
       ok[t] = 0;
       return;
     }
-    const Point3d &a = f.points[tr[0]], &b = f.points[tr[1]], &c = f.points[tr[2]];
-    const Point3d n = normal(a, b, c);
-    const double e = 0.05 * h / std::sqrt(dot(n, n));
     Point3d front, back;
-    for (int k = 0; k < 3; ++k) {
-      const double m = (a[k] + b[k] + c[k]) / 3;
-      front[k] = m + e * n[k];
-      back[k] = m - e * n[k];
-    }
-    ok[t] = winding(front) < 0.25 && winding(back) > 0.75;
+    ok[t] = beside(f, t, 0.05 * h, front, back) && winding(front) < 0.25 && winding(back) > 0.75;
   });
   std::vector<std::array<Point3d, 3>> bad;
   for (std::size_t t = 0; t < T; ++t)
@@ -1712,12 +1733,7 @@ class BoundedDecimation {
                       Mesh::Property_map<vertex_descriptor, std::int64_t>& facet, double reach, double cos_feature) {
     const double on_input = 0.05 * reach;
     const double cos_same = std::cos(10 * M_PI / 180);
-    std::vector<Point3d> unit(f.tris.size());
-    for (std::size_t t = 0; t < f.tris.size(); ++t) {
-      const Point3d n = normal(f.points[f.tris[t][0]], f.points[f.tris[t][1]], f.points[f.tris[t][2]]);
-      const double l = std::sqrt(dot(n, n));
-      unit[t] = {n[0] / l, n[1] / l, n[2] / l};
-    }
+    const std::vector<Point3d> unit = unit_normals(f);
     auto plane = [&](std::int64_t t) {
       const Tri& tr = f.tris[std::size_t(t)];
       auto P = [&](int k) { const Point3d& p = f.points[tr[k]]; return Point(p[0], p[1], p[2]); };
@@ -2137,18 +2153,8 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   if (options.sheets) {
     f.sheet.assign(f.tris.size(), 0);
     tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
-      const Point3d &a = f.points[f.tris[t][0]], &b = f.points[f.tris[t][1]], &c = f.points[f.tris[t][2]];
-      const Point3d n = normal(a, b, c);
-      const double len = std::sqrt(dot(n, n));
-      if (!(len > 0)) return;
-      const double e = 0.05 * g.h / len;
       Point3d front, back;
-      for (int k = 0; k < 3; ++k) {
-        const double m = (a[k] + b[k] + c[k]) / 3;
-        front[k] = m + e * n[k];
-        back[k] = m - e * n[k];
-      }
-      f.sheet[t] = winding(front) <= 0.5 && winding(back) <= 0.5;
+      if (beside(f, t, 0.05 * g.h, front, back)) f.sheet[t] = winding(front) <= 0.5 && winding(back) <= 0.5;
     });
     // A sheet facet within the shell of a facet that does bound the volume (a
     // stray copy of a patch, an overlap lying just off the surface) is
@@ -2301,20 +2307,11 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   if (r.halvings > 0 && any_inside) {
     if (obs) obs->stage("refining the grid");
     std::vector<char> faces_out(f.tris.size(), 0);
-    std::vector<Point3d> unit_normal(f.tris.size());
+    const std::vector<Point3d> unit_normal = unit_normals(f);
     tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
       if (!f.sheet.empty() && f.sheet[t]) return;
-      const Point3d &a = f.points[f.tris[t][0]], &b = f.points[f.tris[t][1]], &c = f.points[f.tris[t][2]];
-      const Point3d n = normal(a, b, c);
-      const double len = std::sqrt(dot(n, n));
-      if (!(len > 0)) return;
-      for (int k = 0; k < 3; ++k) unit_normal[t][k] = n[k] / len;
       Point3d front, back;
-      for (int k = 0; k < 3; ++k) {
-        front[k] = (a[k] + b[k] + c[k]) / 3 + 0.02 * g.h * unit_normal[t][k];
-        back[k] = (a[k] + b[k] + c[k]) / 3 - 0.02 * g.h * unit_normal[t][k];
-      }
-      faces_out[t] = winding(front) < 0.5 && winding(back) > 0.5;
+      faces_out[t] = beside(f, t, 0.02 * g.h, front, back) && winding(front) < 0.5 && winding(back) > 0.5;
     });
     // The facets' open edges (used once): a leaf where a facet ends at one
     // holds the rim of a hole.
