@@ -47,6 +47,7 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
         {"boundary_loops", r.boundary_loops},
         {"sheet_facets", r.sheet_facets},
         {"thin_facets", r.thin_facets},
+        {"outlying_pieces", r.outlying_pieces},
         {"shell", r.shell},
         {"diagonal", r.diagonal},
         {"largest_gap", r.largest_gap}}},
@@ -152,6 +153,9 @@ void print_text(const RebuildArgs& a, const RebuildReport& r) {
                               : "left out (--sheets drop)");
     if (r.thin_facets)
       std::printf("  %zu facets of parts thinner than a cell: wrapped in the shell too\n", r.thin_facets);
+    if (r.outlying_pieces)
+      std::printf("  %zu pieces of facets still more than 3/4 of a cell outside the surface: wrapped in the shell too\n",
+                  r.outlying_pieces);
     std::printf("  corners: %zu, %zu inside; %zu crossed grid edges: %zu on facets, %zu interpolated across "
                 "gaps/holes\n",
                 r.corners, r.inside_corners, r.crossed_edges, r.facet_crossings, r.interpolated);

@@ -509,6 +509,7 @@ TEST_CASE("rebuild: a spike thinner than a cell is followed by refinement to its
   in.add_triangle(b, b + 3, b + 2);
   RebuildOptions uniform;
   uniform.refine = 0;
+  uniform.wrap_outlying = false;  // which would wrap what the grid misses in a cell-thick shell
   const RebuildResult coarse = rebuild(in, uniform);
   REQUIRE(coarse.report.certified);
   CHECK(coarse.report.input_to_output > 10 * coarse.report.cell);  // the spike is lost: the case is at stake
@@ -535,6 +536,7 @@ TEST_CASE("rebuild: the deer's antler and ear tips are followed, and a coarsenin
   const Soup in = read_soup(test::fixture("deer_bound.off"));
   RebuildOptions uniform;
   uniform.refine = 0;
+  uniform.wrap_outlying = false;  // which would wrap what the grid misses in a cell-thick shell
   const RebuildResult coarse = rebuild(in, uniform);
   const double coarse_miss = measure_loss(in, coarse.soup, 2 * coarse.report.cell, true).outside_distance;
   CHECK(coarse_miss > 2 * coarse.report.cell);  // the case is at stake
@@ -553,5 +555,31 @@ TEST_CASE("rebuild: the deer's antler and ear tips are followed, and a coarsenin
   certify_rebuild(in, out, again);
   CHECK(again.certified);
   // The input outside the output (its removed inner walls aside) is within a cell of it.
+  CHECK(measure_loss(in, out, 2 * r.cell, true).outside_distance <= r.cell);
+}
+
+TEST_CASE("rebuild: input left more than a cell outside the surface joins the shell", "[rebuild]") {
+  // CGAL's non_manifold_face_graph (corpus): two open sheets joined by one
+  // upright triangle. Behind the lower sheet and part of the upper one the
+  // winding number is just above 1/2, so those facets count as bounding a
+  // volume, but the 1/2 level leaves them near their edges (up to 8 cells
+  // of the upper sheet were outside the output before). The pieces still
+  // more than 3/4 of a cell outside after refinement join the shell.
+  const Soup in = read_soup(test::fixture("corpus/cgal__non_manifold_face_graph.off"));
+  const RebuildResult result = rebuild(in);
+  const RebuildReport& r = result.report;
+  CHECK(r.sheet_facets > 0);
+  CHECK(r.outlying_pieces > 0);
+  RebuildOptions without;  // the case is at stake: without the wrap, the upper sheet is cells out
+  without.wrap_outlying = false;
+  CHECK(measure_loss(in, rebuild(in, without).soup, 2 * r.cell, true).outside_distance > 4 * r.cell);
+  const Soup out = written(result, "rebuild_nonmanifold_sheets.off");
+  CHECK(inspect(out).certified_clean());
+  CHECK(r.lost_faces == 0);
+  RebuildReport again = r;
+  certify_rebuild(in, out, again);
+  CHECK(again.certified);
+  // Every input point outside the output is within a cell of it (points
+  // inside, on the sheets at the middle of their shells, are a cell in).
   CHECK(measure_loss(in, out, 2 * r.cell, true).outside_distance <= r.cell);
 }

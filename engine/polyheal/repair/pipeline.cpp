@@ -495,6 +495,7 @@ class Pipeline {
                   {"boundary_cells", double(r.boundary_cells)},
                   {"sheet_facets", double(r.sheet_facets)},
                   {"thin_facets", double(r.thin_facets)},
+                  {"outlying_pieces", double(r.outlying_pieces)},
                   {"extracted_faces", double(r.extracted_faces)}};
       std::ostringstream line;
       line << "overlay grid of cell " << r.cell << " (" << r.cell_rule << "), " << r.faces_out << " faces";
