@@ -154,7 +154,7 @@ void print_text(const RebuildArgs& a, const RebuildReport& r) {
     if (r.thin_facets)
       std::printf("  %zu facets of parts thinner than a cell: wrapped in the shell too\n", r.thin_facets);
     if (r.outlying_pieces)
-      std::printf("  %zu pieces of facets still more than 3/4 of a cell outside the surface: wrapped in the shell too\n",
+      std::printf("  %zu pieces of facets still more than 0.6 cell outside the surface: wrapped in the shell too\n",
                   r.outlying_pieces);
     std::printf("  corners: %zu, %zu inside; %zu crossed grid edges: %zu on facets, %zu interpolated across "
                 "gaps/holes\n",
@@ -217,8 +217,9 @@ void add_rebuild(CLI::App& app, int& exit_code) {
       "its tetrahedra bisected further where they miss the surface (--refine); each\n"
       "grid corner is inside when its generalised winding number is above 1/2 (gaps\n"
       "and holes are spanned, overlaps count once). Facets that bound no volume\n"
-      "(open or double-sided sheets) are wrapped in a shell one cell thick on each\n"
-      "side, unless --sheets drop. The output is the boundary of the inside corners\n"
+      "(open or double-sided sheets) are wrapped in a shell 0.9 cell thick on each\n"
+      "side, unless --sheets drop; so are parts thinner than a cell, and pieces of\n"
+      "facets still more than 0.6 cell outside the surface after refinement. The output is the boundary of the inside corners\n"
       "(marching tetrahedra), its vertices on the exact crossings of grid edges with\n"
       "facets, interpolated across gaps, holes and shells: closed, 2-manifold and\n"
       "oriented by construction. Input faces far from every defect are kept exactly\n"
@@ -259,7 +260,7 @@ void add_rebuild(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-sharpen{false}", args->options.sharpen,
                 "leave sharp edges chamfered (no moving of vertices onto the input's edges and corners)");
   cmd->add_option("--sheets", args->sheets,
-                  "facets that bound no volume (open or double-sided sheets): 'shell' wraps them one cell thick on "
+                  "facets that bound no volume (open or double-sided sheets): 'shell' wraps them 0.9 cell thick on "
                   "each side (default), 'drop' leaves them out (reported lost)")
       ->check(CLI::IsMember({"shell", "drop"}));
   cmd->callback([args, &exit_code] {

@@ -388,13 +388,13 @@ TEST_CASE("rebuild: an open sheet beside a solid is wrapped in a shell, or repor
   Soup in = box_patches(2.0, 2);
   for (int i = 0; i < 2; ++i)  // a flat sheet 3 units beside the box: it encloses nothing
     quad(in, {5.0 + i, 0, 0}, {6.0 + i, 0, 0}, {6.0 + i, 2, 0}, {5.0 + i, 2, 0});
-  SECTION("shell (default): a slab one cell thick on each side, nothing lost") {
+  SECTION("shell (default): a slab 0.9 cell thick on each side, nothing lost") {
     const RebuildResult result = rebuild(in);
     const RebuildReport& r = result.report;
     const Soup out = written(result, "rebuild_sheet_shell.off");
     check_solid(in, out, r, 2, 4);  // the box and the slab
     CHECK(r.sheet_facets == 4);
-    CHECK(r.shell == r.cell);
+    CHECK(r.shell == RebuildOptions().sheet_shell * r.cell);
     CHECK(r.lost_faces == 0);
     // box 8 + slab 2 x 2 x (2 shell); the slab's rim is rounded off within a shell
     const double slab = volume(out) - 8.0;
@@ -564,7 +564,7 @@ TEST_CASE("rebuild: input left more than a cell outside the surface joins the sh
   // winding number is just above 1/2, so those facets count as bounding a
   // volume, but the 1/2 level leaves them near their edges (up to 8 cells
   // of the upper sheet were outside the output before). The pieces still
-  // more than 3/4 of a cell outside after refinement join the shell.
+  // more than 0.6 of a cell outside after refinement join the shell.
   const Soup in = read_soup(test::fixture("corpus/cgal__non_manifold_face_graph.off"));
   const RebuildResult result = rebuild(in);
   const RebuildReport& r = result.report;

@@ -2223,6 +2223,11 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   // when its winding number is above 1/2 or it is nearer than the shell's
   // half-thickness to such a facet. The field phi (> 0 inside) interpolates
   // across gaps, holes and shells.
+  // The shell's half-thickness, 0.9 of a cell by default, keeps its surface
+  // within a cell of what it wraps (repair allows its grid stage to move the
+  // surface by one cell; at exactly one, rounding decided), and it still has
+  // a corner inside in every cube it passes through (no point of a cube is
+  // farther than sqrt(3)/2 of its side from every corner).
   std::unique_ptr<detail::SurfaceDistance> to_sheets;
   const double shell = options.sheet_shell * g.h;
   if (options.sheets) {
@@ -2517,17 +2522,21 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
       extract();
     }
   }
-  // What of the input still lies outside the surface and more than 3/4 of
+  // What of the input still lies outside the surface and more than 0.6 of
   // a cell from it (where the 1/2 level leaves a facet that closes a volume
   // only in part, or recedes behind a plate too thin near its rim for the
   // grid; a corner of an overlapping patch poking out) is wrapped in the
-  // shell as well, piece by piece: the facets are sampled 3/4 of a cell
+  // shell as well, piece by piece: the facets are sampled 0.6 of a cell
   // apart, and the sub-triangles with a corner that far out join the shell.
-  // The surface is then extracted again. 3/4, not 1: simplification below
-  // moves the surface by up to a fraction of a cell, and the bound
-  // is one cell (with 1, three corpus soups ended 1.06 to 1.22 cells out).
+  // The surface is then extracted again. 0.6, not 1: sharpening and
+  // decimation below move the surface by up to a fraction of a cell, and
+  // the bound is one cell (with 1, three corpus soups ended 1.06 to
+  // 1.22 cells out; with 3/4, tube_edge4.0 1.06; with 0.6, at most 0.67 on
+  // the 25 rebuild inputs, for up to 1.2x the faces). Bisecting the leaves
+  // the pieces pass through, for a tighter shell, was tried: more faces, no
+  // nearer, and an output TetGen 1.5 asserts on.
   if (options.sheets && options.wrap_outlying && !tris.empty()) {
-    const std::vector<std::array<Point3d, 3>> missed = far_outside(f, ExtractedSurface(vertices, tris), 0.75 * g.h);
+    const std::vector<std::array<Point3d, 3>> missed = far_outside(f, ExtractedSurface(vertices, tris), 0.6 * g.h);
     if (!missed.empty()) {
       if (obs) obs->stage("extracting");
       r.outlying_pieces = missed.size();

@@ -74,8 +74,8 @@ struct RebuildOptions {
   bool keep_clean = true;      // a certified clean input is returned unchanged
   bool keep_regions = true;    // keep input facets far from every defect, zipped to the grid surface
   bool sheets = true;          // wrap facets that bound no volume in a shell (false: leave them out, reported lost)
-  double sheet_shell = 1.0;    // the shell's half-thickness, in cells
-  bool wrap_outlying = true;   // with sheets: wrap what is still 3/4 cell outside the surface in the shell too
+  double sheet_shell = 0.9;    // the shell's half-thickness, in cells (above sqrt(3)/2: see rebuild())
+  bool wrap_outlying = true;   // with sheets: wrap what is still 0.6 cell outside the surface in the shell too
   bool simplify = true;        // collapse vertices inside planar regions (exact, surface unchanged)
   bool decimate = true;        // then collapse vertices elsewhere, within decimate_tolerance (see below)
   double decimate_tolerance = 0.25;  // fraction of the cell: distance of new faces to the extracted surface
@@ -107,7 +107,7 @@ struct RebuildReport {
   std::vector<Region> open_loops;       // each of them: its edges and where
   std::size_t sheet_facets = 0;         // facets bounding no volume (winding <= 1/2 on both sides)
   std::size_t thin_facets = 0;          // facets of parts thinner than a cell, wrapped in the shell too
-  std::size_t outlying_pieces = 0;      // pieces of facets still 3/4 cell outside the surface: shelled
+  std::size_t outlying_pieces = 0;      // pieces of facets still 0.6 cell outside the surface: shelled
   double shell = 0;                     // half-thickness of the shell they are wrapped in (0: none)
   double diagonal = 0;
   double largest_gap = 0;               // between boundary edges of different loops (estimate)
