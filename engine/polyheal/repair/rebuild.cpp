@@ -19,6 +19,7 @@
 #include <unordered_set>
 
 #include "polyheal/inspect/local_index.h"
+#include "polyheal/inspect/predicates.h"
 #include "polyheal/inspect/report.h"
 #include "polyheal/mesh/convert.h"
 #include "polyheal/mesh/errors.h"
@@ -1935,9 +1936,30 @@ class BoundedDecimation {
       if (!CGAL::Euler::does_satisfy_link_condition(mesh_.edge(c.h), mesh_)) continue;
       if (!near_reference(c, limit)) continue;
       if (index_.would_intersect(c.proposed, star)) continue;
+      if (leaves_vertex_near_edge(c)) continue;
       apply(c, star);
       return true;
     }
+    return false;
+  }
+
+  /// Would an edge of the new fan pass within TetGen's relative tolerance
+  /// of a vertex round v or u it does not end at? TetGen cannot recover such
+  /// an edge as a segment (check --tetgen-ready: "vertices nearly on an
+  /// edge"), and the grid surface is meant for it. Only the two rings are
+  /// asked (a vertex from elsewhere that near would make the surface nearly
+  /// touch itself; asking the index for every edge cost 1.5x the time).
+  /// Decided by the filtered predicate on the doubles.
+  bool leaves_vertex_near_edge(const Candidate& c) const {
+    const double eps = InspectOptions().tetgen_epsilon;
+    const vertex_descriptor v = mesh_.source(c.h), u = mesh_.target(c.h);
+    std::vector<vertex_descriptor> near;
+    for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_)) near.push_back(w);
+    for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(u), mesh_)) near.push_back(w);
+    for (const auto& t : c.proposed)
+      for (vertex_descriptor x : {t[0], t[2]})  // the new edges x-u
+        for (vertex_descriptor w : near)
+          if (w != x && w != u && w != v && is_nearly_on_segment(at(w), at(x), at(u), eps)) return true;
     return false;
   }
 
