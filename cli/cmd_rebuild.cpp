@@ -219,10 +219,11 @@ void add_rebuild(CLI::App& app, int& exit_code) {
       "and holes are spanned, overlaps count once). Facets that bound no volume\n"
       "(open or double-sided sheets) are wrapped in a shell 0.9 cell thick on each\n"
       "side, unless --sheets drop; so are parts thinner than a cell, and pieces of\n"
-      "facets still more than 0.6 cell outside the surface after refinement. The output is the boundary of the inside corners\n"
-      "(marching tetrahedra), its vertices on the exact crossings of grid edges with\n"
-      "facets, interpolated across gaps, holes and shells: closed, 2-manifold and\n"
-      "oriented by construction. Input faces far from every defect are kept exactly\n"
+      "facets still more than 0.6 cell outside the surface after refinement. The\n"
+      "output is the boundary of the inside corners (marching tetrahedra), its\n"
+      "vertices on the exact crossings of grid edges with facets, interpolated\n"
+      "across gaps, holes and shells: closed, 2-manifold and oriented by\n"
+      "construction. Input faces far from every defect are kept exactly\n"
       "and zipped to it (--no-keep rebuilds them too). A zip the exact oracle\n"
       "rejects is mended first (the grid faces it crosses are cut away, the patch\n"
       "shrinks where it folds or necks) and zipped again; a patch that still fails\n"
@@ -241,7 +242,7 @@ void add_rebuild(CLI::App& app, int& exit_code) {
                    "input soup (.off, .obj, .stl, .ply): any faces, open, non-manifold, overlapping");
   cmd->add_option("--cell", args->cell,
                   "cell size: model units, or a percentage of the bbox diagonal (default: 1% of the diagonal, or "
-                  "twice the largest gap between boundary loops if larger)");
+                  "1.25 x the largest gap between boundary loops if larger)");
   cmd->add_option("--refine", args->options.refine,
                   "halvings of the cell where the grid misses the surface: a tetrahedron of the grid holding both "
                   "sides of a part thinner than itself or an acute edge (facets more than 120 degrees apart), or, "

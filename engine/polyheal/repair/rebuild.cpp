@@ -2553,8 +2553,8 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   // The surface is then extracted again. 0.6, not 1: sharpening and
   // decimation below move the surface by up to a fraction of a cell, and
   // the bound is one cell (with 1, three corpus soups ended 1.06 to
-  // 1.22 cells out; with 3/4, tube_edge4.0 1.06; with 0.6, at most 0.67 on
-  // the 25 rebuild inputs, for up to 1.2x the faces). Bisecting the leaves
+  // 1.22 cells out; with 3/4, tube_edge4.0 1.06; with 0.6, at most 0.8 on
+  // the 25 rebuild inputs, for up to 1.3x the faces). Bisecting the leaves
   // the pieces pass through, for a tighter shell, was tried: more faces, no
   // nearer, and an output TetGen 1.5 asserts on.
   if (options.sheets && options.wrap_outlying && !tris.empty()) {
