@@ -487,6 +487,11 @@ class Pipeline {
       ro.simplify = ro.decimate = simplify;
       ro.certify = false;
       ro.keep_clean = false;
+      // Not the wrap of what the grid surface still misses: its bumps move
+      // the surface up to 0.9 cell, and repair minimises movement. (With it,
+      // degenerated-sd's grid surface passed every TetGen-readiness test of
+      // ours and TetGen 1.5 threw in delaunizesegments.)
+      ro.wrap_outlying = false;
       ro.observer = o_.observer;
       RebuildResult res = polyheal::rebuild(input_, ro);
       const RebuildReport& r = res.report;
