@@ -31,6 +31,7 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
       {"output", a.output},
       {"certified", r.certified},
       {"unchanged", r.unchanged},
+      {"cleaned", r.cleaned},
       {"volume", r.volume},
       {"parameters",
        {{"cell", r.cell}, {"cell_rule", r.cell_rule}, {"refine", a.options.refine},
@@ -44,6 +45,9 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
         {"groups", r.groups},
         {"zero_area_faces", r.zero_area_faces},
         {"reoriented_faces", r.reoriented_faces},
+        {"inside_out_faces", r.inside_out_faces},
+        {"duplicate_faces", r.duplicate_faces},
+        {"stitched_edges", r.stitched_edges},
         {"boundary_loops", r.boundary_loops},
         {"sheet_facets", r.sheet_facets},
         {"thin_facets", r.thin_facets},
@@ -130,8 +134,15 @@ void print_text(const RebuildArgs& a, const RebuildReport& r) {
   std::printf("  input: %zu faces, %zu vertices, %zu groups; %zu zero-area faces left out, %zu faces reoriented, "
               "%zu boundary loops\n",
               r.faces, r.vertices, r.groups, r.zero_area_faces, r.reoriented_faces, r.boundary_loops);
+  if (r.inside_out_faces)
+    std::printf("  %zu faces of components facing inwards (inside out, or a cavity of one) turned outward\n",
+                r.inside_out_faces);
   if (r.unchanged) {
     std::printf("  input is already closed, 2-manifold, oriented and intersection-free: written unchanged\n");
+  } else if (r.cleaned) {
+    std::printf("  closed by the exact cleanup alone (no grid, no coordinate changed): %zu repeated-index and %zu "
+                "duplicate faces dropped, %zu faces reoriented, %zu edges stitched\n",
+                r.zero_area_faces, r.duplicate_faces, r.reoriented_faces, r.stitched_edges);
   } else {
     std::printf("  grid: cell %g (%s; largest gap %g, diagonal %g), depth %d, %zu octree nodes, %zu boundary "
                 "cells + %zu closing gaps and holes\n",
@@ -212,7 +223,8 @@ void add_rebuild(CLI::App& app, int& exit_code) {
                  "(Hu, Lee, Blacker & Zhu)");
   cmd->footer(
       "Any soup is accepted: no manifoldness or closure needed; polygons are fanned,\n"
-      "zero-area faces left out, inconsistently oriented components made consistent.\n"
+      "zero-area faces left out, inconsistently oriented components made consistent,\n"
+      "components facing inwards (inside out, by the winding number) turned outward.\n"
       "An octree is refined where it meets the facets down to the cell size, and\n"
       "its tetrahedra bisected further where they miss the surface (--refine); each\n"
       "grid corner is inside when its generalised winding number is above 1/2 (gaps\n"
@@ -231,7 +243,10 @@ void add_rebuild(CLI::App& app, int& exit_code) {
       "surface, the rest decimated within a quarter cell (each collapse checked\n"
       "exactly for self-intersection). Faces are grouped by the input's groups (OBJ\n"
       "g, STL solids), else by --feature-angle (OBJ output keeps them). A clean input\n"
-      "is written unchanged. The written file is read back and checked exactly; the\n"
+      "is written unchanged; one that repair's exact cleanup alone closes (identical\n"
+      "vertices shared, repeated-index and duplicate faces dropped, orientation made\n"
+      "consistent and outward, matching borders stitched; no coordinate changed) is\n"
+      "written cleaned, without a grid. The written file is read back and checked exactly; the\n"
       "distances input->output and output->input are measured, and input faces the\n"
       "output does not represent are counted.\n\n"
       "Exit 0 when the written file is closed, 2-manifold, oriented, without\n"
@@ -254,7 +269,7 @@ void add_rebuild(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(0.0, 180.0));
   cmd->add_flag("--no-simplify{false}", args->options.simplify,
                 "keep every extracted triangle (no planar coarsening, no decimation)");
-  cmd->add_flag("--always{false}", args->options.keep_clean, "rebuild even an input that is already clean");
+  cmd->add_flag("--always{false}", args->options.keep_clean, "rebuild on the grid even an input that is clean, or that the exact cleanup closes");
   cmd->add_flag("--no-keep{false}", args->options.keep_regions,
                 "rebuild clean regions too (by default input faces far from every defect are kept exactly and "
                 "zipped to the grid surface)");

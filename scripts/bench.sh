@@ -305,7 +305,11 @@ if want rebuild; then
     [ "$v" = certified ] && rb_ours=$((rb_ours + 1))
     out_faces=$(sed -n '/"output_mesh"/,/}/p' "$work/rb.json" | json_num faces /dev/stdin)
     read -r io oi _ ioo < <("$b/polyheal_gen" distance "$f" "$work/rb_ours.off" 2>/dev/null || echo "- - - -")
-    rel=$(awk -v c="$cell" -v d="$diag" 'BEGIN{printf "%.3g", (d > 0 ? c / d : 0.01)}')
+    # no cell when the exact cleanup alone closed the soup (no grid): the
+    # peer then wraps at the default cell, 1% of the diagonal
+    rel=$(awk -v c="$cell" -v d="$diag" 'BEGIN{printf "%.3g", (d > 0 && c > 0 ? c / d : 0.01)}')
+    shown_rel=$rel
+    grep -q '"cleaned": true' "$work/rb.json" && shown_rel="no grid (cleanup)"
     ours="$v | $out_faces | $(awk -v a="$io" -v o="$ioo" -v b="$oi" -v d="$diag" 'BEGIN{printf "%.2g%% (%.2g%%) / %.2g%%", 100 * a / d, 100 * o / d, 100 * b / d}') | $ours_s s, $((ours_kb / 1024)) MB | $(tetgen_verdict "$work/rb_ours.off")"
     # alpha_wrap_3 at alpha = our cell (relative to the diagonal), offset alpha / 30 (CGAL's example)
     peer="crashed or timed out | | | |"
@@ -322,7 +326,7 @@ if want rebuild; then
       awk -v a="$ours_s" -v c="$cg_wall" 'BEGIN{exit !(c >= 2 * a)}' && rb_faster=$((rb_faster + 1))
       [ "$out_faces" -lt "$cg_faces" ] && rb_fewer=$((rb_fewer + 1))
     fi
-    rb_rows+="| $name | $faces | $rel | $ours | $peer |"$'\n'
+    rb_rows+="| $name | $faces | $shown_rel | $ours | $peer |"$'\n'
     echo "$name: polyheal rebuild $ours_s s; alpha_wrap_3 ${cg_wall:-?} s" >&2
   done
 fi

@@ -5,6 +5,7 @@
 // TetGen), with the input's surface within one cell of the output.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -227,17 +228,45 @@ TEST_CASE("rebuild: a mechanical part with holes (corpus)", "[rebuild]") {
   CHECK(worst <= r.cell);
 }
 
+namespace {
+
+/// Each face's three corners (sorted, orientation ignored), for comparing
+/// the faces of two soups by position.
+std::multiset<std::array<Point3d, 3>> corner_sets(const Soup& s) {
+  std::multiset<std::array<Point3d, 3>> out;
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    std::array<Point3d, 3> c{s.points[s.face(f)[0]], s.points[s.face(f)[1]], s.points[s.face(f)[2]]};
+    std::sort(c.begin(), c.end());
+    out.insert(c);
+  }
+  return out;
+}
+
+}  // namespace
+
 TEST_CASE("rebuild: inconsistently oriented patches are reoriented", "[rebuild]") {
   Soup in = box_patches(2.0, 3);
   for (std::size_t f = 0; f < in.face_count(); f += 3) std::swap(in.indices[3 * f + 1], in.indices[3 * f + 2]);
+  // Welded, the patches are a closed box: the exact cleanup alone closes it,
+  // every face where it was, a third of them turned.
   const RebuildResult result = rebuild(in);
-  CHECK(result.report.reoriented_faces > 0);
+  CHECK(result.report.cleaned);
+  CHECK(result.report.reoriented_faces == in.face_count() / 3);
   const Soup out = written(result, "rebuild_reoriented.off");
   check_solid(in, out, result.report, 1, 2);
-  CHECK(std::abs(volume(out) - 8.0) < 8.0 * 0.05);
-  // Once reoriented the box is clean: every facet is kept as it is.
-  CHECK(result.report.kept_faces == in.face_count());
-  CHECK(out.face_count() == in.face_count());
+  CHECK(std::abs(volume(out) - 8.0) < 1e-12);
+  CHECK(corner_sets(out) == corner_sets(in));
+  CHECK(result.report.hausdorff == 0);
+  // On the grid (--always), reoriented, the box is clean: every facet is
+  // kept as it is.
+  RebuildOptions always;
+  always.keep_clean = false;
+  const RebuildResult kept = rebuild(in, always);
+  CHECK_FALSE(kept.report.cleaned);
+  CHECK(kept.report.reoriented_faces > 0);
+  check_solid(in, written(kept, "rebuild_reoriented_grid.off"), kept.report, 1, 2);
+  CHECK(kept.report.kept_faces == in.face_count());
+  CHECK(kept.soup.face_count() == in.face_count());
   // Sharpening (§5, Fig. 15), on the grid surface (clean regions rebuilt
   // too): box corners come back exactly where the three facet planes meet,
   // and the chamfers the cells cut shrink.
@@ -247,7 +276,7 @@ TEST_CASE("rebuild: inconsistently oriented patches are reoriented", "[rebuild]"
       n += (p[0] == 0 || p[0] == 2) && (p[1] == 0 || p[1] == 2) && (p[2] == 0 || p[2] == 2);
     return n;
   };
-  RebuildOptions grid;
+  RebuildOptions grid = always;
   grid.keep_regions = false;
   const RebuildResult sharp = rebuild(in, grid);
   CHECK(sharp.report.sharpened > 0);
@@ -255,6 +284,85 @@ TEST_CASE("rebuild: inconsistently oriented patches are reoriented", "[rebuild]"
   RebuildOptions blunt = grid;
   blunt.sharpen = false;
   CHECK(box_corners(rebuild(in, blunt).soup) == 0);  // cube marching alone cuts every corner
+}
+
+TEST_CASE("rebuild: a soup the exact cleanup closes skips the grid, unless a sheet would be dropped", "[rebuild]") {
+  // A box (its corners welded only by position), inside out, with a face
+  // repeated, a face copied and a face that repeats an index.
+  Soup in = box_patches(2.0, 2);
+  for (std::size_t f = 0; f < in.face_count(); ++f) std::swap(in.indices[3 * f + 1], in.indices[3 * f + 2]);
+  const std::size_t faces = in.face_count();
+  for (int k : {0, 1, 2}) in.indices.push_back(in.indices[3 * 5 + k]);  // a copy of face 5
+  in.offsets.push_back(in.indices.size());
+  in.add_triangle(in.indices[0], in.indices[0], in.indices[1]);  // zero area, a repeated index
+  SECTION("closed by the cleanup: the input's own faces, turned outward") {
+    const RebuildResult result = rebuild(in);
+    const RebuildReport& r = result.report;
+    CHECK(r.cleaned);
+    CHECK(r.zero_area_faces == 1);
+    CHECK(r.duplicate_faces == 1);
+    CHECK(r.reoriented_faces == 0);  // consistent as it was
+    CHECK(r.inside_out_faces == faces);
+    CHECK(r.boundary_cells == 0);  // no grid
+    const Soup out = written(result, "rebuild_cleaned.off");
+    check_solid(in, out, r, 1, 2);
+    CHECK(out.face_count() == faces);
+    CHECK(std::abs(volume(out) - 8.0) < 1e-12);  // outward
+    Soup box_only = in;
+    box_only.indices.resize(3 * faces);
+    box_only.offsets.resize(faces + 1);
+    CHECK(corner_sets(out) == corner_sets(box_only));
+    CHECK(r.hausdorff == 0);
+  }
+  SECTION("a double-sided sheet beside it cancels in the cleanup: the grid wraps it instead") {
+    Soup sheet;
+    quad(sheet, {5, 0, 0}, {6, 0, 0}, {6, 2, 0}, {5, 2, 0});
+    quad(sheet, {5, 0, 0}, {5, 2, 0}, {6, 2, 0}, {6, 0, 0});  // the same quad, facing down
+    const RebuildResult result = rebuild(test::concat(in, sheet));
+    const RebuildReport& r = result.report;
+    CHECK_FALSE(r.cleaned);
+    CHECK(r.boundary_cells > 0);
+    // the box and the copy face a region of winding number -1: over 90% of
+    // the facets, so the whole soup counts as inside out and turns (the
+    // sheet's two sides too, which changes nothing)
+    CHECK(r.inside_out_faces == faces + 1 + 4);
+    CHECK(r.sheet_facets == 4);
+    CHECK(r.lost_components == 0);
+    CHECK(r.certified);
+    CHECK(inspect(result.soup).components == 2);  // the box and the slab
+  }
+}
+
+TEST_CASE("rebuild: an inside-out soup is turned outward on the grid, its cavity kept", "[rebuild]") {
+  // A 4-unit box with a hole (one quad left out) around a 1-unit cavity; as
+  // a CAD export inside out would write them: the box facing in, the
+  // cavity's walls facing out (into the material).
+  Soup outer = box_patches(4.0, 2);
+  outer.indices.resize(outer.indices.size() - 6);  // the last quad: a hole in the +y side
+  outer.offsets.resize(outer.offsets.size() - 2);
+  Soup cavity = box_patches(1.0, 1);
+  for (Point3d& p : cavity.points)
+    for (double& x : p) x += 1.5;
+  const Soup upright = test::concat(outer, [&] {
+    Soup c = cavity;
+    for (std::size_t f = 0; f < c.face_count(); ++f) std::swap(c.indices[3 * f + 1], c.indices[3 * f + 2]);
+    return c;
+  }());
+  Soup inside_out = upright;
+  for (std::size_t f = 0; f < inside_out.face_count(); ++f)
+    std::swap(inside_out.indices[3 * f + 1], inside_out.indices[3 * f + 2]);
+  const RebuildResult turned = rebuild(inside_out);
+  const RebuildReport& r = turned.report;
+  CHECK(r.inside_out_faces == inside_out.face_count());
+  CHECK(r.sheet_facets == 0);
+  const Soup out = written(turned, "rebuild_inside_out.off");
+  check_solid(inside_out, out, r, 2, 4);  // the box and its cavity
+  CHECK(std::abs(volume(out) - 63.0) < 63.0 * 0.02);
+  CHECK(r.input_to_output <= r.cell);
+  // The same soup facing the right way comes out the same, nothing turned.
+  const RebuildResult as_is = rebuild(upright);
+  CHECK(as_is.report.inside_out_faces == 0);
+  CHECK(std::abs(volume(as_is.soup) - volume(out)) < 1e-9 * 63.0);
 }
 
 TEST_CASE("rebuild: faces far from every defect keep their exact input coordinates", "[rebuild]") {

@@ -17,6 +17,7 @@
 
 #include "polyheal/inspect/predicates.h"
 #include "polyheal/inspect/self_intersections.h"
+#include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/union_find.h"
 #include "polyheal/mesh/weld.h"
 
@@ -325,6 +326,20 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
       }
       polys.push_back(std::move(p));
     }
+  }
+
+  // A caller that wants only a closed 2-manifold stops here when the faces,
+  // whatever their orientation, cannot make one (orientation changes no
+  // edge's use count; orient_polygon_soup, costly on large non-manifold
+  // soups, would only split more).
+  if (o.only_if_closed) {
+    Soup faces;
+    faces.points.resize(pts.size());
+    for (const Tri& t : tris) faces.add_triangle(t[0], t[1], t[2]);
+    const Topology topo = analyze_topology(faces);
+    if (tris.empty() || !topo.boundary_edges.empty() || !topo.nonmanifold_edges.empty() ||
+        !topo.nonmanifold_vertices.empty())
+      return result;
   }
 
   // Orientation. orient_polygon_soup makes each component consistent (and

@@ -32,6 +32,8 @@ struct CleanSoupOptions {
   bool orient = true;             // orient components consistently
   bool fill_holes = true;         // triangulate every boundary loop
   std::size_t max_hole_edges = 0; // leave loops with more edges open (0: no limit)
+  bool only_if_closed = false;    // return an empty soup (before orienting) unless every edge has two
+                                  // faces and every vertex one fan (holes are not filled then)
 };
 
 struct CleanSoupReport {

@@ -15,10 +15,12 @@
 #include <map>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <unordered_map>
 #include <unordered_set>
 
 #include "polyheal/inspect/local_index.h"
+#include "polyheal/inspect/nesting.h"
 #include "polyheal/inspect/predicates.h"
 #include "polyheal/inspect/report.h"
 #include "polyheal/mesh/convert.h"
@@ -28,6 +30,7 @@
 #include "polyheal/mesh/union_find.h"
 #include "polyheal/mesh/vec3.h"
 #include "polyheal/mesh/weld.h"
+#include "polyheal/repair/clean_soup.h"
 #include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/detail/kuhn_mesh.h"
 #include "polyheal/repair/detail/shape_decimation.h"
@@ -211,6 +214,48 @@ Facets prepare(const Soup& input, RebuildReport& r) {
     }
   }
   return f;
+}
+
+/// Turns the components (facets joined by shared edges) that face the wrong
+/// way by their winding numbers `sides` (front, back): at least 90% of their
+/// facets, and 4 or more, face a region below -1/2 (every facet when 90% of
+/// all do: a soup of loose pieces inside out). Only parts facing
+/// inwards make a region negative (overlapping parts make it 2 or more, which
+/// is no evidence); an open patch alone is at -1/2 just in front, so a bare
+/// majority turned parts of open and random soups back and forth. A component
+/// turns once at most (`turned_before`, per facet). True when something
+/// turned (the caller measures again).
+bool turn_inside_out(Facets& f, const std::vector<std::array<double, 2>>& sides, std::vector<char>& turned_before,
+                     RebuildReport& r) {
+  UnionFind components(f.tris.size());
+  {
+    std::unordered_map<std::uint64_t, std::size_t> first;
+    for (std::size_t t = 0; t < f.tris.size(); ++t)
+      for (int k = 0; k < 3; ++k) {
+        const Index a = std::min(f.tris[t][k], f.tris[t][(k + 1) % 3]), b = std::max(f.tris[t][k], f.tris[t][(k + 1) % 3]);
+        const auto [it, fresh] = first.emplace((std::uint64_t(a) << 32) | b, t);
+        if (!fresh) components.unite(it->second, t);
+      }
+  }
+  std::unordered_map<std::size_t, std::array<std::size_t, 2>> votes;  // root -> (facing a negative region, all)
+  std::array<std::size_t, 2> all{0, 0};
+  for (std::size_t t = 0; t < f.tris.size(); ++t) {
+    auto& v = votes[components.find(t)];
+    v[0] += sides[t][0] < -0.5;
+    ++v[1];
+    all[0] += sides[t][0] < -0.5;
+    ++all[1];
+  }
+  const auto wrong = [](const std::array<std::size_t, 2>& v) { return 10 * v[0] >= 9 * v[1] && v[1] >= 4; };
+  bool turned = false;
+  for (std::size_t t = 0; t < f.tris.size(); ++t) {
+    if (!(wrong(all) || wrong(votes[components.find(t)])) || turned_before[t]) continue;
+    turned_before[t] = 1;
+    std::swap(f.tris[t][1], f.tris[t][2]);
+    ++r.inside_out_faces;
+    turned = true;
+  }
+  return turned;
 }
 
 /// Largest gap between boundary edges of different boundary loops (§3.1.3),
@@ -2161,7 +2206,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   if (options.keep_clean && input.face_count() > 0) {
     InspectOptions io;
     const Report in = inspect(input, io);
-    if (in.certified_clean()) {
+    if (in.certified_clean() && nesting(input).inside_out_count == 0) {
       r.unchanged = r.volume = true;
       r.seconds_prepare = seconds_since(t0);
       result.soup = input;
@@ -2170,6 +2215,42 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
       r.face_groups = input.group_names.size();
       if (options.certify) certify_rebuild(input, result.soup, r);
       return result;
+    }
+    // A soup whose only defects are combinatorial (identical vertices not
+    // shared, repeated-index or duplicated faces, inconsistent orientation,
+    // matching borders not stitched) is closed by the coordinate-preserving
+    // cleanup of `repair`'s first stage: no grid, no face moved. Taken only
+    // when the result certifies and nothing the grid would represent was
+    // dropped: no cancelled pair of opposite copies (a double-sided sheet,
+    // which the grid wraps) and no hole filled (the grid fills holes).
+    CleanSoupOptions co;
+    co.fill_holes = false;
+    co.only_if_closed = true;
+    CleanSoupResult c = clean_soup(input, co);
+    if (c.report.cancelled_faces == 0 && c.soup.face_count() > 0) {
+      const Report cleaned = inspect(c.soup, io);
+      if (cleaned.certified_clean()) {
+        const Nesting n = nesting(c.soup);
+        std::size_t turned = 0;
+        if (n.inside_out_count) c.soup = turned_outward(c.soup, n, &turned);
+        if (!input.face_group.empty()) {
+          c.soup.group_names = input.group_names;
+          for (std::int64_t s : c.source) c.soup.face_group.push_back(s >= 0 ? input.face_group[std::size_t(s)] : -1);
+        }
+        r.cleaned = r.volume = true;
+        r.zero_area_faces = c.report.repeated_index_faces;
+        r.duplicate_faces = c.report.duplicate_faces_dropped;
+        r.reoriented_faces = c.report.reoriented_faces;
+        r.inside_out_faces = turned;
+        r.stitched_edges = c.report.stitched_edges;
+        r.seconds_prepare = seconds_since(t0);
+        result.soup = std::move(c.soup);
+        r.faces_out = result.soup.face_count();
+        r.vertices_out = result.soup.points.size();
+        r.face_groups = result.soup.group_names.size();
+        if (options.certify) certify_rebuild(input, result.soup, r);
+        return result;
+      }
     }
   }
   Facets f = prepare(input, r);
@@ -2238,7 +2319,26 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   // and holes).
   t0 = std::chrono::steady_clock::now();
   if (obs) obs->stage("winding numbers");
-  const WindingNumber winding(f);
+  // Each facet's winding number just in front of and just behind it: what
+  // it bounds. A component mostly facing into a region of negative winding
+  // number (inside out, or a cavity of an inside-out part: the rule of
+  // inspect/nesting.h, on a soup) is turned and the field made again.
+  std::optional<WindingNumber> field(std::in_place, f);
+  std::vector<std::array<double, 2>> sides(f.tris.size());
+  const auto measure_sides = [&] {
+    tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
+      Point3d front, back;
+      sides[t] = beside(f, t, 0.05 * g.h, front, back) ? std::array<double, 2>{(*field)(front), (*field)(back)}
+                                                       : std::array<double, 2>{0.0, 1.0};
+    });
+  };
+  measure_sides();
+  std::vector<char> turned_before(f.tris.size(), 0);
+  for (int round = 0; round < 4 && turn_inside_out(f, sides, turned_before, r); ++round) {
+    field.emplace(f);
+    measure_sides();
+  }
+  const WindingNumber& winding = *field;
   // Facets that bound no volume (the winding number is below 1/2 on both
   // sides: open sheets, double-sided sheets, stray triangles) are wrapped in
   // a shell (options.sheets), so that nothing is dropped: a corner is inside
@@ -2254,10 +2354,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   const double shell = options.sheet_shell * g.h;
   if (options.sheets) {
     f.sheet.assign(f.tris.size(), 0);
-    tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
-      Point3d front, back;
-      if (beside(f, t, 0.05 * g.h, front, back)) f.sheet[t] = winding(front) <= 0.5 && winding(back) <= 0.5;
-    });
+    for (std::size_t t = 0; t < f.tris.size(); ++t) f.sheet[t] = sides[t][0] <= 0.5 && sides[t][1] <= 0.5;
     // A sheet facet within the shell of a facet that does bound the volume (a
     // stray copy of a patch, an overlap lying just off the surface) is
     // represented by that surface already: no shell for it.

@@ -71,7 +71,8 @@ struct RebuildOptions {
   double cell_ratio = -1;      // cell size as a fraction of the bbox diagonal; <= 0: the default rule
   int refine = 2;              // halvings of the cell where the grid misses the surface (0: uniform cells)
   double feature_angle = 30;   // degrees: grouping output faces when the input has no groups
-  bool keep_clean = true;      // a certified clean input is returned unchanged
+  bool keep_clean = true;      // a certified clean input is returned unchanged, and one that the
+                               // exact cleanup closes returned cleaned (RebuildReport::cleaned)
   bool keep_regions = true;    // keep input facets far from every defect, zipped to the grid surface
   bool sheets = true;          // wrap facets that bound no volume in a shell (false: leave them out, reported lost)
   double sheet_shell = 0.9;    // the shell's half-thickness, in cells (above sqrt(3)/2: see rebuild())
@@ -103,6 +104,9 @@ struct RebuildReport {
   std::size_t faces = 0, vertices = 0, groups = 0;
   std::size_t zero_area_faces = 0;      // left out: they bound nothing
   std::size_t reoriented_faces = 0;     // flipped to agree with their component (inconsistent input)
+  std::size_t inside_out_faces = 0;     // of components facing inwards (inside out; a cavity of one), turned
+  std::size_t duplicate_faces = 0;      // copies of a face beyond the first (cleanup only)
+  std::size_t stitched_edges = 0;       // border edges joined to their match (cleanup only)
   std::size_t boundary_loops = 0;       // of the welded input
   std::vector<Region> open_loops;       // each of them: its edges and where
   std::size_t sheet_facets = 0;         // facets bounding no volume (winding <= 1/2 on both sides)
@@ -130,6 +134,8 @@ struct RebuildReport {
   std::size_t interpolated = 0;         // ... across a gap or hole
   // output
   bool unchanged = false;               // input was already clean
+  bool cleaned = false;                 // closed by the exact cleanup alone (no grid; zero_area_faces,
+                                        // duplicate_faces, reoriented_faces and stitched_edges tell what it did)
   bool volume = false;                  // some corner is inside
   std::size_t beads_dropped = 0;        // tiny extracted components another component already stands for
   std::size_t extracted_faces = 0;      // before simplification
