@@ -107,6 +107,8 @@ struct Facets {
   std::vector<Tri> tris;
   std::vector<std::int32_t> group;  // per triangle (-1: none)
   std::vector<char> sheet;          // per triangle: bounds no volume (empty: none is)
+  std::vector<std::size_t> component;  // per triangle: joined through shared edges (analyze_topology)
+  std::size_t components = 0;
 };
 
 /// Each facet's unit normal (zero for one whose normal vanishes in doubles;
@@ -165,6 +167,8 @@ Facets prepare(const Soup& input, RebuildReport& r) {
   const Topology topo = analyze_topology(s);
   r.boundary_loops = topo.boundary_loops;
   r.open_loops = boundary_loop_regions(s, topo);
+  f.component = topo.face_component;
+  f.components = topo.components;
   if (!topo.misoriented_edges.empty()) {
     std::vector<std::vector<std::pair<std::size_t, bool>>> adj(f.tris.size());  // (neighbour, same direction)
     std::unordered_map<std::uint64_t, std::vector<std::pair<std::size_t, bool>>> uses;
@@ -216,7 +220,7 @@ Facets prepare(const Soup& input, RebuildReport& r) {
   return f;
 }
 
-/// Turns the components (facets joined by shared edges) that face the wrong
+/// Turns the components (f.component) that face the wrong
 /// way by their winding numbers `sides` (front, back): at least 90% of their
 /// facets, and 4 or more, face a region below -1/2 (every facet when 90% of
 /// all do: a soup of loose pieces inside out). Only parts facing
@@ -227,29 +231,20 @@ Facets prepare(const Soup& input, RebuildReport& r) {
 /// turned (the caller measures again).
 bool turn_inside_out(Facets& f, const std::vector<std::array<double, 2>>& sides, std::vector<char>& turned_before,
                      RebuildReport& r) {
-  UnionFind components(f.tris.size());
-  {
-    std::unordered_map<std::uint64_t, std::size_t> first;
-    for (std::size_t t = 0; t < f.tris.size(); ++t)
-      for (int k = 0; k < 3; ++k) {
-        const Index a = std::min(f.tris[t][k], f.tris[t][(k + 1) % 3]), b = std::max(f.tris[t][k], f.tris[t][(k + 1) % 3]);
-        const auto [it, fresh] = first.emplace((std::uint64_t(a) << 32) | b, t);
-        if (!fresh) components.unite(it->second, t);
-      }
-  }
-  std::unordered_map<std::size_t, std::array<std::size_t, 2>> votes;  // root -> (facing a negative region, all)
+  std::vector<std::array<std::size_t, 2>> votes(f.components, {0, 0});  // (facing a negative region, all)
   std::array<std::size_t, 2> all{0, 0};
   for (std::size_t t = 0; t < f.tris.size(); ++t) {
-    auto& v = votes[components.find(t)];
-    v[0] += sides[t][0] < -0.5;
-    ++v[1];
-    all[0] += sides[t][0] < -0.5;
+    const bool negative = sides[t][0] < -0.5;
+    votes[f.component[t]][0] += negative;
+    ++votes[f.component[t]][1];
+    all[0] += negative;
     ++all[1];
   }
+  if (all[0] == 0) return false;
   const auto wrong = [](const std::array<std::size_t, 2>& v) { return 10 * v[0] >= 9 * v[1] && v[1] >= 4; };
   bool turned = false;
   for (std::size_t t = 0; t < f.tris.size(); ++t) {
-    if (!(wrong(all) || wrong(votes[components.find(t)])) || turned_before[t]) continue;
+    if (!(wrong(all) || wrong(votes[f.component[t]])) || turned_before[t]) continue;
     turned_before[t] = 1;
     std::swap(f.tris[t][1], f.tris[t][2]);
     ++r.inside_out_faces;
