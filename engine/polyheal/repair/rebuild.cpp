@@ -1524,8 +1524,11 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
 // (every star vertex a facet crossing of a facet coplanar with its own,
 // decided exactly on the facets' doubles) is collapsed into a neighbour when
 // every triangle of the new fan keeps the star's orientation in that plane
-// (exact 2D orientations of the projected points) and the link condition
-// holds: the new fan tiles the same polygon, so the surface is unchanged.
+// (exact 2D orientations of the projected points), no new triangle is
+// nearly degenerate in TetGen's sense (the crossings along one straight line
+// are rounded, so three of them make a sliver the exact test sees as a
+// triangle; check --tetgen-ready counts them), and the link condition holds:
+// the new fan tiles the same polygon, so the surface is unchanged.
 
 using SMesh = CGAL::Surface_mesh<IPoint>;
 using SVertex = SMesh::Vertex_index;
@@ -1643,7 +1646,7 @@ class PlanarCoarsening {
         const SVertex a = mesh_.source(g), c = mesh_.target(mesh_.next(g));
         if (a == u || c == u) continue;  // the two faces the collapse removes
         const Point3d pa = pt(mesh_.point(a)), pu = pt(mesh_.point(u)), pc = pt(mesh_.point(c));
-        if (orient2(axis, pa, pu, pc) != star) {
+        if (orient2(axis, pa, pu, pc) != star || is_nearly_degenerate(pa, pu, pc, tetgen_epsilon_)) {
           ok = false;
           break;
         }
@@ -1666,6 +1669,7 @@ class PlanarCoarsening {
   }
 
   static constexpr std::size_t kMaxValence = 24;
+  const double tetgen_epsilon_ = InspectOptions().tetgen_epsilon;
   const Facets& f_;
   std::vector<char> on_plane_;
   std::unordered_map<std::uint64_t, bool> coplanar_;
@@ -1765,7 +1769,8 @@ class BoundedDecimation {
   /// feature angle moves onto their intersection line (its nearest point),
   /// or, with a third independent plane, onto their common point — exact
   /// constructions (Epeck), rounded once — when that is within `reach`, its
-  /// faces stay non-degenerate, turn less than 75 degrees, fold onto no
+  /// faces stay non-degenerate (exactly, and within TetGen's tolerance:
+  /// sharpening_nears_tolerance), turn less than 75 degrees, fold onto no
   /// neighbour (normals more than 179 degrees apart) and intersect nothing
   /// (the oracle's local query). Cube-marching chamfers become edges.
   /// `input`: the facets of `f`. The edge or corner must be one of the
@@ -1820,7 +1825,7 @@ class BoundedDecimation {
         target = l->projection(mesh_.point(v));
       }
       const Point3d x = nearest_point3d(target);
-      const Point3d& old = at(v);
+      const Point3d old_at = at(v), &old = old_at;
       const Point3d d{x[0] - old[0], x[1] - old[1], x[2] - old[2]};
       if (dot(d, d) > reach * reach || dot(d, d) == 0) continue;
       if (input.squared_distance(x) > on_input * on_input) continue;
@@ -1847,11 +1852,12 @@ class BoundedDecimation {
       if (!ok) continue;
       const Point before = mesh_.point(v);
       mesh_.point(v) = Point(x[0], x[1], x[2]);
-      if (index_.would_intersect(proposed, star)) {
+      at_[static_cast<std::size_t>(v)] = x;
+      if (sharpening_nears_tolerance(v) || index_.would_intersect(proposed, star)) {
         mesh_.point(v) = before;
+        at_[static_cast<std::size_t>(v)] = old_at;
         continue;
       }
-      at_[static_cast<std::size_t>(v)] = x;
       moved_[static_cast<std::size_t>(v)] = 1;  // off the extracted surface now
       index_.update(star);
       facet[v] = -1;  // on two planes now: it votes for no face group
@@ -1986,21 +1992,52 @@ class BoundedDecimation {
   /// Would an edge of the new fan pass within TetGen's relative tolerance
   /// of a vertex round v or u it does not end at? TetGen cannot recover such
   /// an edge as a segment (check --tetgen-ready: "vertices nearly on an
-  /// edge"), and the grid surface is meant for it. Only the two rings are
-  /// asked (a vertex from elsewhere that near would make the surface nearly
-  /// touch itself; asking the index for every edge cost 1.5x the time).
-  /// Decided by the filtered predicate on the doubles.
+  /// edge"), and the grid surface is meant for it.
   bool leaves_vertex_near_edge(const Candidate& c) const {
-    const double eps = InspectOptions().tetgen_epsilon;
     const vertex_descriptor v = mesh_.source(c.h), u = mesh_.target(c.h);
-    std::vector<vertex_descriptor> near;
-    for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_)) near.push_back(w);
-    for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(u), mesh_)) near.push_back(w);
+    std::vector<std::array<vertex_descriptor, 2>> edges;
     for (const auto& t : c.proposed)
-      for (vertex_descriptor x : {t[0], t[2]})  // the new edges x-u
-        for (vertex_descriptor w : near)
-          if (w != x && w != u && w != v && is_nearly_on_segment(at(w), at(x), at(u), eps)) return true;
+      for (vertex_descriptor x : {t[0], t[2]}) edges.push_back({x, u});
+    return near_edges(edges, {v, u}, v);
+  }
+
+  /// Does a vertex of the rings round `around` (but `gone`) lie within
+  /// TetGen's relative tolerance of one of `edges` it does not end at? Only
+  /// the rings are asked (a vertex from elsewhere that near would make the
+  /// surface nearly touch itself; asking the index for every edge cost 1.5x
+  /// the time). Decided by the filtered predicate on the doubles.
+  bool near_edges(const std::vector<std::array<vertex_descriptor, 2>>& edges,
+                  const std::vector<vertex_descriptor>& around, vertex_descriptor gone) const {
+    const double eps = InspectOptions().tetgen_epsilon;
+    std::vector<vertex_descriptor> near;
+    for (vertex_descriptor a : around)
+      for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(a), mesh_))
+        if (w != gone) near.push_back(w);
+    for (const auto& [x, y] : edges)
+      for (vertex_descriptor w : near)
+        if (w != x && w != y && is_nearly_on_segment(at(w), at(x), at(y), eps)) return true;
     return false;
+  }
+
+  /// Sharpening v onto an input edge: would it leave a face round v nearly
+  /// degenerate, a vertex near one of v's edges, or v near an edge of its
+  /// neighbours' (TetGen's relative tolerance)? Vertices already moved onto
+  /// the same edge are rounded copies of collinear points: the face three of
+  /// them make is flat but for the rounding, which the exact test for
+  /// collinearity does not see. Asked with at(v) at its new place.
+  bool sharpening_nears_tolerance(vertex_descriptor v) const {
+    const double eps = InspectOptions().tetgen_epsilon;
+    std::vector<std::array<vertex_descriptor, 2>> edges;
+    std::vector<vertex_descriptor> around{v};
+    for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
+      const vertex_descriptor p = mesh_.source(g), q = mesh_.target(mesh_.next(g));
+      if (is_nearly_degenerate(at(p), at(v), at(q), eps)) return true;
+      edges.push_back({v, p});
+      around.push_back(p);
+      for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(p), mesh_))
+        if (w != v && is_nearly_on_segment(at(v), at(p), at(w), eps)) return true;
+    }
+    return near_edges(edges, around, mesh_.null_vertex());
   }
 
   /// The new triangles' centroids and edge midpoints lie within `limit` of
