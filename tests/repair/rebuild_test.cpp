@@ -702,10 +702,14 @@ TEST_CASE("rebuild: rounded crossings on one straight line make no slivers TetGe
   // checks: CGAL's tetrahedron crossed by a triangle (its planar coarsening
   // joined such crossings) came out with 9 nearly degenerate faces and 15
   // vertices nearly on an edge; bones (its sharpening moved a third vertex
-  // onto an input edge between two already on it) with 1 and 1.
+  // onto an input edge between two already on it) with 1 and 1; trimesh's
+  // random soup with 2 vertices on an edge three faces away (the surface
+  // reaches the crossing line of two facets from two sides, and sharpening
+  // put both sides on it).
   const std::pair<const char*, const char*> cases[] = {
       {"corpus/cgal__tetra_intersected_by_triangle.off", "rebuild_slivers_tetra.off"},
-      {"bones.off", "rebuild_slivers_bones.off"}};
+      {"bones.off", "rebuild_slivers_bones.off"},
+      {"corpus/trimesh__soup.stl", "rebuild_slivers_soup.off"}};
   for (const auto& [name, scratch] : cases) {
     INFO(name);
     const Soup in = read_soup(test::fixture(name));

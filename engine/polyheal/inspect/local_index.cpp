@@ -331,6 +331,15 @@ bool LocalIndex::would_intersect(const std::vector<std::array<vertex_descriptor,
   return false;
 }
 
+std::vector<face_descriptor> LocalIndex::faces_meeting(const CGAL::Bbox_3& box) const {
+  std::vector<std::uint32_t> candidates;
+  impl_->candidates_of(box, candidates);
+  std::vector<face_descriptor> out;
+  out.reserve(candidates.size());
+  for (std::uint32_t f : candidates) out.emplace_back(f);
+  return out;
+}
+
 std::size_t LocalIndex::size() const { return impl_->count; }
 
 }  // namespace polyheal

@@ -54,6 +54,11 @@ class LocalIndex {
   bool would_intersect(const std::vector<std::array<vertex_descriptor, 3>>& proposed,
                        const std::vector<face_descriptor>& replaced) const;
 
+  /// Indexed faces whose bounding boxes meet `box` (the boxes as last
+  /// indexed: a face whose vertex moved since keeps its old box until
+  /// update()).
+  std::vector<face_descriptor> faces_meeting(const CGAL::Bbox_3& box) const;
+
   std::size_t size() const;
 
  private:

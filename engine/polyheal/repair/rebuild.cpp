@@ -1762,6 +1762,9 @@ class BoundedDecimation {
     error_ = mesh_.add_property_map<face_descriptor, double>("f:rebuild_error", 0.0).first;
     for (vertex_descriptor v : mesh_.vertices()) at_.push_back(nearest_point3d(mesh_.point(v)));
     moved_.assign(at_.size(), 0);
+    Region all;
+    for (const Point3d& p : at_) grow(all, p, all.count++ == 0);
+    diagonal_ = at_.empty() ? 0 : dist(all.lo, all.hi);
   }
 
   /// §5, Fig. 15 (crisper edges from the facets' normals): a vertex whose
@@ -1992,52 +1995,59 @@ class BoundedDecimation {
   /// Would an edge of the new fan pass within TetGen's relative tolerance
   /// of a vertex round v or u it does not end at? TetGen cannot recover such
   /// an edge as a segment (check --tetgen-ready: "vertices nearly on an
-  /// edge"), and the grid surface is meant for it.
+  /// edge"), and the grid surface is meant for it. Only the two rings are
+  /// asked (a vertex from elsewhere that near would make the surface nearly
+  /// touch itself; asking the index for every edge cost 1.5x the time).
+  /// Decided by the filtered predicate on the doubles.
   bool leaves_vertex_near_edge(const Candidate& c) const {
-    const vertex_descriptor v = mesh_.source(c.h), u = mesh_.target(c.h);
-    std::vector<std::array<vertex_descriptor, 2>> edges;
-    for (const auto& t : c.proposed)
-      for (vertex_descriptor x : {t[0], t[2]}) edges.push_back({x, u});
-    return near_edges(edges, {v, u}, v);
-  }
-
-  /// Does a vertex of the rings round `around` (but `gone`) lie within
-  /// TetGen's relative tolerance of one of `edges` it does not end at? Only
-  /// the rings are asked (a vertex from elsewhere that near would make the
-  /// surface nearly touch itself; asking the index for every edge cost 1.5x
-  /// the time). Decided by the filtered predicate on the doubles.
-  bool near_edges(const std::vector<std::array<vertex_descriptor, 2>>& edges,
-                  const std::vector<vertex_descriptor>& around, vertex_descriptor gone) const {
     const double eps = InspectOptions().tetgen_epsilon;
+    const vertex_descriptor v = mesh_.source(c.h), u = mesh_.target(c.h);
     std::vector<vertex_descriptor> near;
-    for (vertex_descriptor a : around)
-      for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(a), mesh_))
-        if (w != gone) near.push_back(w);
-    for (const auto& [x, y] : edges)
-      for (vertex_descriptor w : near)
-        if (w != x && w != y && is_nearly_on_segment(at(w), at(x), at(y), eps)) return true;
+    for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_)) near.push_back(w);
+    for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(u), mesh_)) near.push_back(w);
+    for (const auto& t : c.proposed)
+      for (vertex_descriptor x : {t[0], t[2]})  // the new edges x-u
+        for (vertex_descriptor w : near)
+          if (w != x && w != u && w != v && is_nearly_on_segment(at(w), at(x), at(u), eps)) return true;
     return false;
   }
 
   /// Sharpening v onto an input edge: would it leave a face round v nearly
-  /// degenerate, a vertex near one of v's edges, or v near an edge of its
-  /// neighbours' (TetGen's relative tolerance)? Vertices already moved onto
-  /// the same edge are rounded copies of collinear points: the face three of
-  /// them make is flat but for the rounding, which the exact test for
-  /// collinearity does not see. Asked with at(v) at its new place.
+  /// degenerate, a vertex near one of v's edges, or v near an edge (TetGen's
+  /// relative tolerance)? Vertices already moved onto the same edge are
+  /// rounded copies of collinear points: the face three of them make is flat
+  /// but for the rounding, which the exact test for collinearity does not
+  /// see; and where the surface comes to that edge from two sides (a crease
+  /// of a soup's crossing facets, reached round both), a vertex of one side
+  /// can lie on an edge of the other. So the faces near each edge are asked
+  /// of the index, not only the rings. Asked with at(v) at its new place,
+  /// before the index is updated (the star's boxes, still the old ones,
+  /// hold their edges opposite v, and every other vertex has faces of its
+  /// own).
   bool sharpening_nears_tolerance(vertex_descriptor v) const {
     const double eps = InspectOptions().tetgen_epsilon;
-    std::vector<std::array<vertex_descriptor, 2>> edges;
-    std::vector<vertex_descriptor> around{v};
+    auto box = [&](const Point3d& a, const Point3d& b, double grow) {
+      return CGAL::Bbox_3(std::min(a[0], b[0]) - grow, std::min(a[1], b[1]) - grow, std::min(a[2], b[2]) - grow,
+                          std::max(a[0], b[0]) + grow, std::max(a[1], b[1]) + grow, std::max(a[2], b[2]) + grow);
+    };
+    const Point3d& x = at(v);
     for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
       const vertex_descriptor p = mesh_.source(g), q = mesh_.target(mesh_.next(g));
-      if (is_nearly_degenerate(at(p), at(v), at(q), eps)) return true;
-      edges.push_back({v, p});
-      around.push_back(p);
-      for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(p), mesh_))
-        if (w != v && is_nearly_on_segment(at(v), at(p), at(w), eps)) return true;
+      if (is_nearly_degenerate(at(p), x, at(q), eps)) return true;
+      // a vertex near the edge v p: within eps |vp| of it
+      const Point3d& y = at(p);
+      const double grow = 2 * eps * dist(x, y);
+      for (face_descriptor f : index_.faces_meeting(box(x, y, grow)))
+        for (vertex_descriptor w : CGAL::vertices_around_face(mesh_.halfedge(f), mesh_))
+          if (w != v && w != p && is_nearly_on_segment(at(w), x, y, eps)) return true;
     }
-    return near_edges(edges, around, mesh_.null_vertex());
+    // v near an edge xy: within eps |xy| <= eps x the diagonal of it
+    for (face_descriptor f : index_.faces_meeting(box(x, x, 2 * eps * diagonal_)))
+      for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_)) {
+        const vertex_descriptor a = mesh_.source(h), b = mesh_.target(h);
+        if (a != v && b != v && is_nearly_on_segment(x, at(a), at(b), eps)) return true;
+      }
+    return false;
   }
 
   /// The new triangles' centroids and edge midpoints lie within `limit` of
@@ -2089,6 +2099,7 @@ class BoundedDecimation {
   std::vector<char> moved_;  // per vertex: sharpened, so no longer on the extracted surface
   Mesh::Property_map<face_descriptor, double> error_;
   std::vector<Point3d> at_;
+  double diagonal_ = 0;  // of the points' bounding box: bounds every edge
 };
 
 // ---------------------------------------------------------------------------
