@@ -220,19 +220,35 @@ class Separation {
   DV normal_;
 };
 
-/// Normals (in doubles) less than about 1e-6 radians apart, or either
-/// nearly zero: a measurement that only picks which test runs first.
+/// Normals (in doubles) less than about 1e-6 radians apart, and b's corners
+/// within about 1e-9 of the pair's extent off a's plane: a measurement that
+/// only picks which test runs first. Pairs merely parallel but apart, or
+/// crossing, are left to CGAL's filters, which decide them at once (the
+/// certificate would fail on crossing pairs and cost its time on top).
 template <class K>
-bool nearly_parallel(const Tri<K>& a, const Tri<K>& b) {
-  auto normal = [](const Tri<K>& t) {
-    const double ux = t.p[1].x() - t.p[0].x(), uy = t.p[1].y() - t.p[0].y(), uz = t.p[1].z() - t.p[0].z();
-    const double vx = t.p[2].x() - t.p[0].x(), vy = t.p[2].y() - t.p[0].y(), vz = t.p[2].z() - t.p[0].z();
-    return std::array<double, 3>{uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx};
+bool nearly_coplanar(const Tri<K>& a, const Tri<K>& b) {
+  using V = std::array<double, 3>;
+  auto sub = [](const typename K::Point_3& p, const typename K::Point_3& q) {
+    return V{p.x() - q.x(), p.y() - q.y(), p.z() - q.z()};
   };
-  const std::array<double, 3> n = normal(a), m = normal(b);
-  const double c[3] = {n[1] * m[2] - n[2] * m[1], n[2] * m[0] - n[0] * m[2], n[0] * m[1] - n[1] * m[0]};
-  const double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2], mm = m[0] * m[0] + m[1] * m[1] + m[2] * m[2];
-  return c[0] * c[0] + c[1] * c[1] + c[2] * c[2] <= 1e-12 * nn * mm;
+  auto dot = [](const V& u, const V& v) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; };
+  auto cross = [](const V& u, const V& v) {
+    return V{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  };
+  const V u = sub(a.p[1], a.p[0]), v = sub(a.p[2], a.p[0]);
+  const V n = cross(u, v), m = cross(sub(b.p[1], b.p[0]), sub(b.p[2], b.p[0]));
+  const double nn = dot(n, n), mm = dot(m, m);
+  const V c = cross(n, m);
+  if (!(dot(c, c) <= 1e-20 * nn * mm)) return false;
+  double l2 = std::max(dot(u, u), dot(v, v));
+  for (int k = 0; k < 3; ++k) l2 = std::max(l2, dot(sub(b.p[k], a.p[0]), sub(b.p[k], a.p[0])));
+  bool off = false;
+  for (int k = 0; k < 3; ++k) {
+    const double h = dot(n, sub(b.p[k], a.p[0]));
+    if (!(h * h <= 1e-26 * nn * l2)) return false;
+    off = off || h != 0;
+  }
+  return off;
 }
 
 }  // namespace
@@ -257,7 +273,7 @@ bool faces_intersect(const Tri<K>& a, const Tri<K>& b) {
   // as neighbours in a planar region whose rounded vertices lie just off
   // their plane. Only those are given the certificate first.
   bool certify_first = true;
-  if constexpr (std::is_same_v<K, InputKernel>) certify_first = nearly_parallel(a, b);
+  if constexpr (std::is_same_v<K, InputKernel>) certify_first = nearly_coplanar(a, b);
   if (shared < 3 && certify_first) {
     CGAL::Protect_FPU_rounding<true> upward;  // the intervals' arithmetic
     if (Separation(a, b).apart(shared, ia, ib)) return false;
