@@ -1828,7 +1828,7 @@ class BoundedDecimation {
         target = l->projection(mesh_.point(v));
       }
       const Point3d x = nearest_point3d(target);
-      const Point3d old_at = at(v), &old = old_at;
+      const Point3d old = at(v);
       const Point3d d{x[0] - old[0], x[1] - old[1], x[2] - old[2]};
       if (dot(d, d) > reach * reach || dot(d, d) == 0) continue;
       if (input.squared_distance(x) > on_input * on_input) continue;
@@ -1858,7 +1858,7 @@ class BoundedDecimation {
       at_[static_cast<std::size_t>(v)] = x;
       if (sharpening_nears_tolerance(v) || index_.would_intersect(proposed, star)) {
         mesh_.point(v) = before;
-        at_[static_cast<std::size_t>(v)] = old_at;
+        at_[static_cast<std::size_t>(v)] = old;
         continue;
       }
       moved_[static_cast<std::size_t>(v)] = 1;  // off the extracted surface now

@@ -58,8 +58,8 @@ bool edge_meets_triangle(const typename K::Point_3& p, const typename K::Point_3
 /// region of rounded points are, no filter decides CGAL's orientation tests
 /// and they fall back to exact arithmetic: rationals for the exact kernel's
 /// lazy split points (most of degenerate's decimation time on CAD fans),
-/// Mpzf after a thrown exception for doubles (a third of rebuild's
-/// decimation time on the flat-sided tubes). Such
+/// Mpzf after a thrown exception for doubles (a sixth of rebuild's
+/// simplification time on the flat-sided tubes). Such
 /// neighbours are usually well apart within their plane, though, so a plane
 /// chosen in doubles that separates them is found, and the separation is
 /// then checked with interval arithmetic on the points' enclosures: a
@@ -220,11 +220,13 @@ class Separation {
   DV normal_;
 };
 
-/// Normals (in doubles) less than about 1e-6 radians apart, and b's corners
-/// within about 1e-9 of the pair's extent off a's plane: a measurement that
-/// only picks which test runs first. Pairs merely parallel but apart, or
-/// crossing, are left to CGAL's filters, which decide them at once (the
-/// certificate would fail on crossing pairs and cost its time on top).
+/// Normals (in doubles) less than about 1e-10 radians apart, b's corners
+/// within about 1e-13 of the pair's extent off a's plane, and one of them
+/// off it in doubles: a measurement that only picks which test runs first.
+/// Pairs merely parallel, or crossing, are left to CGAL's filters, which
+/// decide them at once; so are pairs exactly coplanar in doubles, which its
+/// interval filter decides where their arithmetic is exact (cycloidal's
+/// 179k such pairs cost 20% more through the certificate first).
 template <class K>
 bool nearly_coplanar(const Tri<K>& a, const Tri<K>& b) {
   using V = std::array<double, 3>;
