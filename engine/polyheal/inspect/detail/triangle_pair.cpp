@@ -8,6 +8,8 @@
 #include <CGAL/Interval_nt.h>
 #include <CGAL/intersections.h>
 
+#include "polyheal/mesh/vec3.h"
+
 namespace polyheal::detail {
 namespace {
 
@@ -229,24 +231,17 @@ class Separation {
 /// 179k such pairs cost 20% more through the certificate first).
 template <class K>
 bool nearly_coplanar(const Tri<K>& a, const Tri<K>& b) {
-  using V = std::array<double, 3>;
-  auto sub = [](const typename K::Point_3& p, const typename K::Point_3& q) {
-    return V{p.x() - q.x(), p.y() - q.y(), p.z() - q.z()};
-  };
-  auto dot = [](const V& u, const V& v) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; };
-  auto cross = [](const V& u, const V& v) {
-    return V{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-  };
-  const V u = sub(a.p[1], a.p[0]), v = sub(a.p[2], a.p[0]);
-  const V n = cross(u, v), m = cross(sub(b.p[1], b.p[0]), sub(b.p[2], b.p[0]));
+  auto at = [](const typename K::Point_3& p) { return Point3d{p.x(), p.y(), p.z()}; };
+  const Point3d o = at(a.p[0]), u = sub(at(a.p[1]), o), v = sub(at(a.p[2]), o);
+  const std::array<Point3d, 3> d{sub(at(b.p[0]), o), sub(at(b.p[1]), o), sub(at(b.p[2]), o)};  // b from a's corner
+  const Point3d n = cross(u, v), m = cross(sub(d[1], d[0]), sub(d[2], d[0]));
   const double nn = dot(n, n), mm = dot(m, m);
-  const V c = cross(n, m);
-  if (!(dot(c, c) <= 1e-20 * nn * mm)) return false;
+  if (!(squared_norm(cross(n, m)) <= 1e-20 * nn * mm)) return false;
   double l2 = std::max(dot(u, u), dot(v, v));
-  for (int k = 0; k < 3; ++k) l2 = std::max(l2, dot(sub(b.p[k], a.p[0]), sub(b.p[k], a.p[0])));
+  for (const Point3d& e : d) l2 = std::max(l2, dot(e, e));
   bool off = false;
-  for (int k = 0; k < 3; ++k) {
-    const double h = dot(n, sub(b.p[k], a.p[0]));
+  for (const Point3d& e : d) {
+    const double h = dot(n, e);
     if (!(h * h <= 1e-26 * nn * l2)) return false;
     off = off || h != 0;
   }
