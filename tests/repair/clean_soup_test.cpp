@@ -166,6 +166,33 @@ TEST_CASE("clean_soup: a missing face is filled from existing vertices, reported
   CHECK_FALSE(inspect(left.soup).closed);
 }
 
+TEST_CASE("clean_soup: two holes touching at a vertex are filled one by one, not bridged", "[clean_soup]") {
+  // An icosphere missing two faces that share one vertex and no edge: the
+  // vertex is a pinch between the holes. Each hole is a triangle, so the
+  // only fill within the input's vertices is the missing face itself.
+  const Soup sphere = test::icosphere(1.0, 2);
+  std::size_t first = 0, second = 0;
+  for (std::size_t f = 1; f < sphere.face_count() && second == 0; ++f) {
+    int shared = 0;
+    for (Index i : sphere.face(0))
+      for (Index j : sphere.face(f)) shared += i == j;
+    if (shared == 1) second = f;
+  }
+  REQUIRE(second != 0);
+  Soup open;
+  open.points = sphere.points;
+  for (std::size_t f = 0; f < sphere.face_count(); ++f)
+    if (f != first && f != second) open.add_triangle(sphere.face(f)[0], sphere.face(f)[1], sphere.face(f)[2]);
+  REQUIRE_FALSE(inspect(open).manifold);  // the pinch
+
+  const CleanSoupResult r = clean_soup(open);
+  CHECK(r.report.holes == 2);
+  CHECK(r.report.holes_filled == 2);
+  CHECK(r.report.hole_faces == 2);
+  CHECK(inspect(r.soup).certified_clean());
+  CHECK(test::faces_by_position(r.soup) == test::faces_by_position(sphere));
+}
+
 TEST_CASE("clean_soup: a near weld closes a crack the exact weld cannot, and says how far it moved", "[clean_soup]") {
   Soup cube = stl_cube();
   for (std::size_t f = 6; f < 12; ++f)  // half the faces' copies of each corner nudged by 1e-7

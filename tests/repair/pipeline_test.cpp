@@ -211,6 +211,61 @@ TEST_CASE("assess: provenance matches polygons corner for corner, in either orie
   CHECK(a.provenance[5] == -1);
 }
 
+TEST_CASE("assess: a hole fill cut into pieces is still a fill, not moved surface", "[pipeline]") {
+  // The input: an icosphere with one face missing. The written surface:
+  // the sphere with that face cut at its centroid into three (what a later
+  // stage may do to a fill). Only the whole fill is listed; its pieces
+  // span the hole, up to a third of an edge from the input.
+  const Soup sphere = test::icosphere(1.0, 2);
+  Soup in, out;
+  in.points = out.points = sphere.points;
+  for (std::size_t f = 1; f < sphere.face_count(); ++f) {
+    in.add_triangle(sphere.face(f)[0], sphere.face(f)[1], sphere.face(f)[2]);
+    out.add_triangle(sphere.face(f)[0], sphere.face(f)[1], sphere.face(f)[2]);
+  }
+  const Index a = sphere.face(0)[0], b = sphere.face(0)[1], c = sphere.face(0)[2];
+  const Point3d &pa = sphere.points[a], &pb = sphere.points[b], &pc = sphere.points[c];
+  const Index m = Index(out.points.size());
+  out.points.push_back({(pa[0] + pb[0] + pc[0]) / 3, (pa[1] + pb[1] + pc[1]) / 3, (pa[2] + pb[2] + pc[2]) / 3});
+  out.add_triangle(a, b, m);
+  out.add_triangle(b, c, m);
+  out.add_triangle(c, a, m);
+  const std::vector<std::array<Point3d, 3>> fills = {{pa, pb, pc}};
+  const double limit = 0.01;
+
+  const Assessment listed = assess(in, inspect(in), out, limit, false, fills);
+  CHECK(listed.fill_faces == 3);
+  CHECK(listed.deviation <= listed.error_bound);
+  CHECK(listed.within_deviation);
+  CHECK(listed.fill_distance > limit);  // the pieces are measured, as fills
+
+  const Assessment unlisted = assess(in, inspect(in), out, limit, false);
+  CHECK(unlisted.fill_faces == 0);
+  CHECK_FALSE(unlisted.within_deviation);
+}
+
+TEST_CASE("repair: holes in a self-intersecting surface: fills a union cuts are not surface moved", "[pipeline]") {
+  // bones with every 29th face missing: clean fills the holes, local moves
+  // cannot free every pair within the limit, and the union of the filled
+  // surface (regularize without local moves) moves nothing but cuts some
+  // fills. Kept, and the written file within the limit, only when those
+  // pieces count as fills.
+  const Soup bones = read_soup(test::fixture("bones.off"));
+  Soup in;
+  in.points = bones.points;
+  for (std::size_t f = 0; f < bones.face_count(); ++f)
+    if (f % 29 != 28) in.add_triangle(bones.face(f)[0], bones.face(f)[1], bones.face(f)[2]);
+  const RepairResult r = repair(in);
+  REQUIRE(ran(r.report, "regularize (without local moves)", true));
+  const std::string p = test::scratch("bones_holes.off");
+  write_soup(r.soup, p);
+  const Assessment a = assess(in, r.input, read_soup(p), max_deviation_of({}, r.report.diagonal), false, r.hole_fills);
+  CHECK(a.certified);
+  CHECK(a.within_deviation);
+  CHECK(a.dropped_components == 0);
+  CHECK(a.fill_faces > r.hole_fills.size());  // pieces of cut fills among them
+}
+
 TEST_CASE("repair --for tetgen: a surface TetGen itself refuses is a defect, not a result", "[pipeline][tetgen]") {
   // Our TetGen-readiness test cannot foresee every failure of TetGen's
   // floating-point boundary recovery (an opened grazing union aborts in

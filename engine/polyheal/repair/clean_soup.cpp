@@ -3,6 +3,7 @@
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Exact_rational.h>
+#include <CGAL/Polygon_mesh_processing/merge_border_vertices.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/stitch_borders.h>
@@ -385,6 +386,13 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
     PMP::polygon_soup_to_polygon_mesh(pts, polys, mesh);
     r.stitched_edges = PMP::stitch_borders(mesh);
     if (o.fill_holes) {
+      // Two holes that touch at a vertex: orient_polygon_soup gives each fan
+      // there its own copy of the point, and that joins the two holes into
+      // one border cycle through both copies (a figure eight). Filled as one
+      // polygon it would bridge the holes with faces far from the input and
+      // edges used four times; the copies within a cycle are merged back, so
+      // that each hole is a cycle of its own and is filled alone.
+      PMP::merge_duplicated_vertices_in_boundary_cycles(mesh);
       std::vector<SMesh::Halfedge_index> loops;
       std::vector<char> seen(mesh.number_of_halfedges() + mesh.number_of_removed_halfedges(), 0);  // stitching leaves removed slots
       for (SMesh::Halfedge_index h : mesh.halfedges()) {

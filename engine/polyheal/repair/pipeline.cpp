@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -216,9 +217,12 @@ class Pipeline {
       // another topology or a larger Hausdorff distance — a union merges
       // what overlapped and removes what lies inside it, moving nothing.
       // (The Hausdorff distance bounds the deviation, so a current surface
-      // within the limit by it is never assessed.)
+      // within the limit by it is never assessed.) A candidate that filled
+      // no holes of its own carries the current fills (a stage run from the
+      // filled surface), so they are what it is assessed with, as on keeping.
       if (!better && both_ok && !empty && cur_.hausdorff > deviation_limit() &&
-          !within_limit(cur_, result_.hole_fills) && within_limit(next, pending_fills_)) {
+          !within_limit(cur_, result_.hole_fills) &&
+          within_limit(next, pending_fills_.empty() ? result_.hole_fills : pending_fills_)) {
         better = true;
         s.outcome += (s.outcome.empty() ? "" : "; ") +
                      std::string("kept: within --max-deviation, where the current surface is not");
@@ -673,13 +677,34 @@ Assessment assess(const Soup& input, const Report& in, const Soup& written, doub
     // The surface moved: how far the output is from the input, but for
     // faces spanning input vertices only (hole fills), and the input, but
     // for what the output encloses, from the output.
+    // A fill a later stage split (regularize cuts faces along the curves
+    // where they cross) is still a fill: a face whose corners all lie on
+    // one fill triangle, within the measurement's error bound, lies on it
+    // (the distance to a triangle is convex). Fills are measured apart
+    // (fill_distance), not left out.
     std::unordered_set<CornerKey, CornerKeyHash> fill_keys;
     for (const std::array<Point3d, 3>& t : hole_fills) fill_keys.insert(corner_key({t.begin(), t.end()}));
+    const std::unique_ptr<detail::SurfaceDistance> fill_surface =
+        hole_fills.empty() ? nullptr : std::make_unique<detail::SurfaceDistance>(hole_fills);
+    const double on_fill2 = a.error_bound * a.error_bound;
+    const auto on_one_fill = [&](const FaceView& v) {
+      const Point3d &p = written.points[v[0]], &q = written.points[v[1]], &r = written.points[v[2]];
+      Point3d lo = p, hi = p;
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = std::min({p[k], q[k], r[k]}) - a.error_bound;
+        hi[k] = std::max({p[k], q[k], r[k]}) + a.error_bound;
+      }
+      for (std::size_t t : fill_surface->triangles_near(lo, hi))
+        if (fill_surface->squared_distance_to(p, t) <= on_fill2 && fill_surface->squared_distance_to(q, t) <= on_fill2 &&
+            fill_surface->squared_distance_to(r, t) <= on_fill2)
+          return true;
+      return false;
+    };
     Soup moved, fills;
     moved.points = fills.points = written.points;
     for (std::size_t f = 0; f < written.face_count(); ++f) {
       const FaceView v = written.face(f);
-      const bool fill = v.size() == 3 && fill_keys.count(corner_key(written, f)) > 0;
+      const bool fill = v.size() == 3 && (fill_keys.count(corner_key(written, f)) > 0 || (fill_surface && on_one_fill(v)));
       (fill ? fills : moved).add_face(v.begin(), v.end());
     }
     double output_moved = moved.face_count() ? detail::one_sided_distances(moved, input, a.error_bound)[0] : 0.0;

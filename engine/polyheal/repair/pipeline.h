@@ -135,9 +135,11 @@ struct Assessment {
   bool certified = false;                  // out.certified_clean() (and tetgen_ready with for_tetgen)
   double hausdorff = -1, input_to_output = -1, output_to_input = -1, error_bound = 0;
   // How far the surface moved: max(output -> input, input -> output), the
-  // first over the output faces that are not hole fills (`hole_fills`: they
-  // add surface across an opening rather than move it; how far they are
-  // from the input is fill_distance), the second over the input outside
+  // first over the output faces that are not hole fills (`hole_fills`, and
+  // the pieces a later stage cut them into: faces whose corners lie on one
+  // fill within error_bound; they add surface across an opening rather than
+  // move it; how far they are from the input is fill_distance), the second
+  // over the input outside
   // the output's volume (measured apart only when the plain input -> output
   // distance exceeds max_deviation; otherwise that plain distance, an upper
   // bound, is reported). Input faces farther than max_deviation from
