@@ -63,12 +63,17 @@ TEST_CASE("repair: interpenetrating spheres become their union, the inside is ab
   const Soup in = read_soup(test::fixture("spheres_intersecting.off"));
   const RepairResult r = repair(in);
   CHECK(ran(r.report, "regularize", true));
+  // Local moves free some pairs first, and the union of what they left is
+  // as far from the input as the union of the spheres as given (what is
+  // absorbed dominates both): the union that moved nothing is kept.
+  CHECK(ran(r.report, "regularize (without local moves)", true));
   const double diag = r.report.diagonal;
-  const Assessment a = written(in, r, "pipe_spheres.off", 0.01 * diag);
+  const Assessment a = written(in, r, "pipe_spheres.off", 0.01 * diag, true);  // TetGen meshes it
   CHECK(a.certified);
   CHECK(a.absorbed_faces > 0);             // the caps inside the other sphere
-  CHECK(a.output_to_input < 0.01 * diag);  // every output face lies on the input
-  CHECK(a.deviation < a.hausdorff);        // removed, not moved
+  CHECK(a.output_to_input <= a.error_bound);  // every output face lies on the input
+  CHECK(a.deviation <= a.error_bound);        // removed, not moved
+  CHECK(a.deviation < a.hausdorff);
   CHECK(a.dropped_components == 0);
 }
 

@@ -42,6 +42,7 @@ struct State {
   std::size_t defects = 0;
   double hausdorff = 0;  // to the input
   std::optional<bool> within;  // assess()ed within the deviation limit, no component dropped (asked lazily)
+  double deviation = -1;       // the surface moved, as assess()ed with `within`
 };
 
 /// The surface without its closed components that are no larger than
@@ -173,6 +174,7 @@ class Pipeline {
     if (!s.within) {
       const Assessment a = assess(input_, result_.input, s.soup, deviation_limit(), o_.for_tetgen, fills, &s.report);
       s.within = a.within_deviation && a.dropped_components == 0;
+      s.deviation = a.deviation;
     }
     return *s.within;
   }
@@ -220,12 +222,28 @@ class Pipeline {
       // within the limit by it is never assessed.) A candidate that filled
       // no holes of its own carries the current fills (a stage run from the
       // filled surface), so they are what it is assessed with, as on keeping.
+      const std::vector<std::array<Point3d, 3>>& next_fills =
+          pending_fills_.empty() ? result_.hole_fills : pending_fills_;
       if (!better && both_ok && !empty && cur_.hausdorff > deviation_limit() &&
-          !within_limit(cur_, result_.hole_fills) &&
-          within_limit(next, pending_fills_.empty() ? result_.hole_fills : pending_fills_)) {
+          !within_limit(cur_, result_.hole_fills) && within_limit(next, next_fills)) {
         better = true;
         s.outcome += (s.outcome.empty() ? "" : "; ") +
                      std::string("kept: within --max-deviation, where the current surface is not");
+      }
+      // Both certified, of the same topology and equally far from the input
+      // (within the measure's bound; what differs is the input a union
+      // absorbed, the same in both): the one that moved the surface less is
+      // the smaller repair — a union of the surface as given moves nothing,
+      // local moves before it moved vertices for nothing.
+      if (!better && both_ok && !empty && topology_of(next.report) == topology_of(cur_.report) &&
+          std::abs(next.hausdorff - cur_.hausdorff) <= bound) {
+        const bool cur_within = within_limit(cur_, result_.hole_fills);
+        const bool next_within = within_limit(next, next_fills);
+        if ((next_within || !cur_within) && next.deviation + bound < cur_.deviation) {
+          better = true;
+          s.outcome += (s.outcome.empty() ? "" : "; ") +
+                       std::string("kept: as far from the input, but moves the surface less");
+        }
       }
       if (better) {
         s.accepted = true;
@@ -274,6 +292,7 @@ class Pipeline {
     next.defects = defect_count(next.report, o_.for_tetgen);
     next.hausdorff = cur_.hausdorff;
     next.within = cur_.within;
+    next.deviation = cur_.deviation;
     s.accepted = true;
     s.faces_out = next.soup.face_count();
     s.defects_after = next.defects;
