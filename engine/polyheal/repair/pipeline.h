@@ -139,13 +139,13 @@ struct Assessment {
   // the pieces a later stage cut them into: faces whose corners lie on one
   // fill within error_bound; they add surface across an opening rather than
   // move it; how far they are from the input is fill_distance), the second
-  // over the input outside
-  // the output's volume (measured apart only when the plain input -> output
-  // distance exceeds max_deviation; otherwise that plain distance, an upper
-  // bound, is reported). Input faces farther than max_deviation from
-  // the output and inside its volume (the inside of interpenetrating parts,
-  // inner walls, enclosed components) are absorbed: removed, not moved;
-  // their area is reported and whole components of them count as dropped.
+  // over the input outside the output's volume (measured apart only when
+  // the plain input -> output distance exceeds max_deviation; otherwise
+  // that plain distance, an upper bound, is reported). Input faces farther
+  // than max_deviation from the output and inside its volume (the inside
+  // of interpenetrating parts, inner walls, enclosed components) are
+  // absorbed: removed, not moved; their area is reported and whole
+  // components of them count as dropped.
   double deviation = -1;
   double fill_distance = 0;
   std::size_t fill_faces = 0;
