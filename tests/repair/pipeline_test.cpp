@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "polyheal/inspect/nesting.h"
@@ -75,6 +76,40 @@ TEST_CASE("repair: interpenetrating spheres become their union, the inside is ab
   CHECK(a.deviation <= a.error_bound);        // removed, not moved
   CHECK(a.deviation < a.hausdorff);
   CHECK(a.dropped_components == 0);
+}
+
+TEST_CASE("repair: a fin on a closed surface is left out, every other face kept as it was", "[pipeline]") {
+  // A sphere with a stray triangle on one of its edges: the edge is used
+  // three times, the fin's other two edges once. The grid would close it
+  // (a thin shell round the fin, every face remeshed); leaving the fin out
+  // moves the surface by the fin's size only, so it is done when that is
+  // within --max-deviation, and not when it is not.
+  const Soup sphere = test::icosphere(1.0, 2);
+  auto with_fin = [&](double height) {
+    Soup s = sphere;
+    const Index a = sphere.face(0)[0], b = sphere.face(0)[1];
+    const Point3d &pa = sphere.points[a], &pb = sphere.points[b];
+    const double m[3] = {(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2, (pa[2] + pb[2]) / 2};
+    const double n = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+    s.points.push_back({m[0] * (1 + height / n), m[1] * (1 + height / n), m[2] * (1 + height / n)});
+    s.add_triangle(b, a, Index(s.points.size() - 1));
+    return s;
+  };
+  const Soup small = with_fin(0.01);  // the diagonal is 2 * sqrt(3): 0.3% of it
+  RepairResult r = repair(small);
+  CHECK(ran(r.report, "flaps", true));
+  const double limit = max_deviation_of({}, r.report.diagonal);
+  Assessment a = written(small, r, "pipe_fin.off", limit, true);  // TetGen meshes it
+  CHECK(a.certified);
+  CHECK(a.within_deviation);
+  CHECK(a.faces_kept == sphere.face_count());
+  CHECK(r.soup.face_count() == sphere.face_count());
+
+  const Soup big = with_fin(0.2);  // 6% of the diagonal
+  r = repair(big);
+  CHECK(ran(r.report, "flaps", false));
+  a = written(big, r, "pipe_big_fin.off", limit);
+  CHECK(a.certified);
 }
 
 TEST_CASE("repair: convex pieces glued with a wall left between two (deer_bound) are regularized, not rebuilt",

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdlib>
+#include <map>
 #include <numeric>
+#include <unordered_map>
 
 #include "polyheal/mesh/union_find.h"
 
@@ -152,6 +155,87 @@ Topology analyze_topology(const Soup& soup) {
     if (keyed[i].first == keyed[i - 1].first) t.duplicate_faces.push_back({keyed[i - 1].second, keyed[i].second});
   std::sort(t.duplicate_faces.begin(), t.duplicate_faces.end());
   return t;
+}
+
+std::vector<std::size_t> sheets_to_leave_out(const Soup& soup, bool flaps, long* imbalance_left) {
+  const Topology t = analyze_topology(soup);
+  auto key = [](Index a, Index b) { return (std::uint64_t(std::min(a, b)) << 32) | std::max(a, b); };
+  auto sign = [](const EdgeUse& u) { return u.from < u.to ? 1L : -1L; };
+  struct Rim {
+    long balance = 0;       // uses one way minus the other, by kept faces
+    std::size_t uses = 0;   // by kept faces
+    std::size_t input_uses = 0;
+  };
+  std::unordered_map<std::uint64_t, Rim> rims;  // the edges that are not interior
+  long total = 0;
+  for (const auto* edges : {&t.boundary_edges, &t.nonmanifold_edges, &t.misoriented_edges})
+    for (const Edge& e : *edges) {
+      Rim& r = rims[key(e.a, e.b)];
+      for (const EdgeUse& u : e.uses) r.balance += sign(u);
+      r.uses = r.input_uses = e.uses.size();
+      total += std::abs(r.balance);
+    }
+  std::vector<std::size_t> out;
+  if (total > 0) {
+    UnionFind sheet_of(soup.face_count());
+    for (const Topology::InteriorEdge& e : t.interior_edges) sheet_of.unite(e.face0, e.face1);
+    struct Sheet {
+      std::vector<std::size_t> faces;
+      std::map<std::uint64_t, std::pair<long, std::size_t>> rim;  // edge -> (net use, uses) by the sheet
+      bool done = false;
+    };
+    std::map<std::size_t, Sheet> by_root;
+    for (std::size_t f = 0; f < soup.face_count(); ++f) by_root[sheet_of.find(f)].faces.push_back(f);
+    for (const auto* edges : {&t.boundary_edges, &t.nonmanifold_edges, &t.misoriented_edges})
+      for (const Edge& e : *edges)
+        for (const EdgeUse& u : e.uses) {
+          auto& [net, uses] = by_root[sheet_of.find(u.face)].rim[key(e.a, e.b)];
+          net += sign(u);
+          ++uses;
+        }
+    std::vector<Sheet*> order;
+    for (auto& [root, sh] : by_root) order.push_back(&sh);
+    std::stable_sort(order.begin(), order.end(),
+                     [](const Sheet* a, const Sheet* b) { return a->faces.size() < b->faces.size(); });
+    // A wall's rim edges have 3+ uses in the input; a flap's rim is free
+    // edges and such edges, of which one at least is still used twice by
+    // kept faces outside it (what it hangs off is kept).
+    auto hangs = [&](const Sheet& sh) {
+      bool free = false, held = false;
+      for (const auto& [k, use] : sh.rim) {
+        const Rim& r = rims[k];
+        const std::size_t others = r.uses - use.second;
+        if (flaps && others == 0) {
+          free = true;
+        } else if (r.input_uses >= 3) {
+          held = held || others >= 2;
+        } else {
+          return false;
+        }
+      }
+      return !free || held;
+    };
+    for (bool progress = true; total > 0 && progress;) {
+      progress = false;
+      for (Sheet* sh : order) {
+        if (sh->done || !hangs(*sh)) continue;
+        long gain = 0;
+        for (const auto& [k, use] : sh->rim) gain += std::abs(rims[k].balance) - std::abs(rims[k].balance - use.first);
+        if (gain <= 0) continue;
+        for (const auto& [k, use] : sh->rim) {
+          rims[k].balance -= use.first;
+          rims[k].uses -= use.second;
+        }
+        total -= gain;
+        out.insert(out.end(), sh->faces.begin(), sh->faces.end());
+        sh->done = true;
+        progress = true;
+      }
+    }
+  }
+  if (imbalance_left) *imbalance_left = total;
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 }  // namespace polyheal

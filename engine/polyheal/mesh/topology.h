@@ -48,4 +48,23 @@ struct Topology {
 /// Analyses `soup` (indices as given: weld first for positional sharing).
 Topology analyze_topology(const Soup& soup);
 
+/// The faces to leave out so that `soup` (welded) comes nearer to bounding a
+/// volume — every edge used as often in each direction — when sheets that
+/// hang off the rest are what stops it.
+///
+/// The surface is cut into sheets: faces joined across edges with exactly
+/// two uses in opposite directions. A sheet's net use of its other (rim)
+/// edges is what leaving it out changes. Smaller sheets are tried first (a
+/// wall or a fin is a face or a few; the solids it hangs off are large), and
+/// one is left out when that lowers the total imbalance (sum over edges of
+/// |uses one way - uses the other|) and it hangs off what is kept: each rim
+/// edge is used at least twice by kept faces outside the sheet (a wall
+/// between two solids, meeting them along its whole rim) or, with `flaps`,
+/// by none (a free edge: a fin or flap hanging off a solid along its other
+/// rim edges, of which it needs one). So a hole stays a hole (its rim is
+/// used once by the faces around it) and faces turned the wrong way stay
+/// (two uses in one direction: an orientation defect). Sorted face ids;
+/// `imbalance_left` (if given) gets the total imbalance of what is kept.
+std::vector<std::size_t> sheets_to_leave_out(const Soup& soup, bool flaps, long* imbalance_left = nullptr);
+
 }  // namespace polyheal

@@ -107,6 +107,7 @@ class Pipeline {
       return std::move(result_);
     }
     // The outline: each stage runs when the inspection says it is needed.
+    if (wanted(kStepClean) && !cur_.report.closed && !cur_.report.nonmanifold_edges.empty()) flaps();
     if (wanted(kStepClean) && needs_clean()) clean();
     if (wanted(kStepDegenerate) && !done() && !cur_.report.degenerate_faces.empty()) degenerate();
     // Self-intersections: local moves first; on a closed surface the union
@@ -189,7 +190,7 @@ class Pipeline {
   /// UnsupportedInput: the stage refuses this surface). The candidate
   /// replaces the current surface when it is better (see below).
   template <class Run>
-  StageReport& stage(const char* name, Run run) {
+  StageReport& stage(const char* name, Run run, bool only_within = false) {
     if (o_.observer) o_.observer->stage(name);
     StageReport s;
     s.name = name;
@@ -245,11 +246,16 @@ class Pipeline {
                        std::string("kept: as far from the input, but moves the surface less");
         }
       }
+      if (better && only_within && !within_limit(next, next_fills)) {
+        better = false;
+        s.outcome += (s.outcome.empty() ? "" : "; ") +
+                     std::string("not kept: the surface moves more than --max-deviation");
+      }
       if (better) {
         s.accepted = true;
         cur_ = std::move(next);
         if (!pending_fills_.empty()) result_.hole_fills = std::move(pending_fills_);
-      } else {
+      } else if (s.outcome.find("not kept: ") == std::string::npos) {
         s.outcome += (s.outcome.empty() ? "" : "; ") + std::string("not kept: ") +
                      (empty     ? std::string("no face left")
                       : both_ok ? "another topology than, or farther from the input than, the current surface"
@@ -308,6 +314,39 @@ class Pipeline {
     cur_ = std::move(next);
     s.seconds = seconds_since(t0);
     result_.report.stages.push_back(std::move(s));
+  }
+
+  /// Fins and flaps: sheets of faces hanging off the rest along edges with
+  /// three or more uses, free along their other edges (a stray triangle on a
+  /// solid's edge). No closed surface can keep them without a volume they
+  /// do not have; left out (sheets_to_leave_out), they leave the solid they
+  /// hang off, and they are kept out only when that moves the surface no
+  /// more than --max-deviation (a larger sheet is the grid's: it wraps it).
+  void flaps() {
+    const Soup welded = apply_weld(cur_.soup, weld_identical_points(cur_.soup.points));
+    const std::vector<std::size_t> out = sheets_to_leave_out(welded, true);
+    if (out.empty()) return;
+    stage(
+        "flaps",
+        [&](StageReport& s) {
+          Soup kept;
+          kept.points = cur_.soup.points;
+          kept.group_names = cur_.soup.group_names;
+          for (std::size_t f = 0, k = 0; f < cur_.soup.face_count(); ++f) {
+            if (k < out.size() && out[k] == f) {
+              ++k;
+              continue;
+            }
+            const FaceView v = cur_.soup.face(f);
+            kept.add_face(v.begin(), v.end());
+            if (!cur_.soup.face_group.empty()) kept.face_group.push_back(cur_.soup.face_group[f]);
+          }
+          s.counts = {{"faces_left_out", double(out.size())}};
+          s.outcome = std::to_string(out.size()) + " face" + (out.size() == 1 ? "" : "s") +
+                      " of fins, flaps or walls left out (sheets hanging off the rest along edges used 3+ times)";
+          return kept;
+        },
+        /*only_within=*/true);
   }
 
   void clean() {

@@ -1135,87 +1135,45 @@ void split_pinches(const Soup& input, bool input_manifold, RegularizeResult& res
   }
 }
 
-/// The corner polygon f is fanned from: the first whose fan has no exactly
-/// zero-area triangle (0 if none has).
 /// The faces to leave out so that `s` (welded) bounds a volume — every edge
 /// used as often in each direction, so that the winding number is defined
 /// off the surface — when walls and doubled faces are all that stop it: a
 /// one-sided wall between two solids that both lack the face they share (a
 /// convex decomposition's pieces glued, one cap left between them), the
-/// shared face given twice in one direction. Empty when `s` balances already.
-///
-/// The surface is cut into sheets: faces joined across edges with exactly
-/// two uses in opposite directions. A sheet's net use of the other edges is
-/// what leaving it out changes. Smaller sheets are tried first (a wall is a
-/// face or two; the solids beside it are large), and one is left out only
-/// when that lowers the total imbalance (sum over edges of |uses one way -
-/// uses the other|) and every edge it shares with the rest has three or more
-/// uses: a wall meets solids along its whole rim. So a hole stays a hole (an
-/// edge with one use) and faces turned the wrong way stay (two uses in one
-/// direction: an orientation defect, for `repair`). Throws UnsupportedInput,
-/// naming an edge, when what is left still does not balance.
+/// shared face given twice in one direction (sheets_to_leave_out, without
+/// flaps: a wall meets solids along its whole rim). Empty when `s` balances
+/// already. Throws UnsupportedInput, naming an edge, when what is left still
+/// does not balance.
 std::vector<std::size_t> walls_to_leave_out(const Soup& s) {
-  const Topology t = analyze_topology(s);
-  std::unordered_map<std::uint64_t, long> balance;  // the edges that are not interior
-  auto sign = [](const EdgeUse& u) { return u.from < u.to ? 1L : -1L; };
-  long total = 0;
-  for (const auto* edges : {&t.boundary_edges, &t.nonmanifold_edges, &t.misoriented_edges})
-    for (const Edge& e : *edges) {
-      long b = 0;
-      for (const EdgeUse& u : e.uses) b += sign(u);
-      balance[edge_key(e.a, e.b)] = b;
-      total += std::abs(b);
-    }
-  if (total == 0) return {};
-  UnionFind sheet_of(s.face_count());
-  for (const Topology::InteriorEdge& e : t.interior_edges) sheet_of.unite(e.face0, e.face1);
-  struct Sheet {
-    std::vector<std::size_t> faces;
-    std::map<std::uint64_t, long> uses;  // net use of each edge that is not interior
-    bool wall = true;                    // every edge it shares with the rest has 3+ uses
-  };
-  std::map<std::size_t, Sheet> sheets;   // by the smallest face in it
-  for (std::size_t f = 0; f < s.face_count(); ++f) sheets[sheet_of.find(f)].faces.push_back(f);
-  for (const auto* edges : {&t.boundary_edges, &t.nonmanifold_edges, &t.misoriented_edges})
-    for (const Edge& e : *edges)
-      for (const EdgeUse& u : e.uses) {
-        Sheet& sh = sheets[sheet_of.find(u.face)];
-        sh.uses[edge_key(e.a, e.b)] += sign(u);
-        sh.wall &= e.uses.size() >= 3;
-      }
-  std::vector<Sheet*> order;
-  for (auto& [first, sh] : sheets)
-    if (sh.wall) order.push_back(&sh);
-  std::stable_sort(order.begin(), order.end(),
-                   [](const Sheet* a, const Sheet* b) { return a->faces.size() < b->faces.size(); });
-  std::vector<std::size_t> out;
-  for (bool progress = true; total > 0 && progress;) {
-    progress = false;
-    for (Sheet*& sh : order) {
-      if (!sh) continue;
-      long gain = 0;
-      for (const auto& [key, n] : sh->uses) gain += std::abs(balance[key]) - std::abs(balance[key] - n);
-      if (gain <= 0) continue;
-      for (const auto& [key, n] : sh->uses) balance[key] -= n;
-      total -= gain;
-      out.insert(out.end(), sh->faces.begin(), sh->faces.end());
-      sh = nullptr;
-      progress = true;
-    }
-  }
-  if (total > 0) {
+  long left = 0;
+  std::vector<std::size_t> out = sheets_to_leave_out(s, false, &left);
+  if (left > 0) {
+    const Topology t = analyze_topology(s);
+    std::vector<char> out_face(s.face_count(), 0);
+    for (std::size_t f : out) out_face[f] = 1;
+    auto sign = [](const EdgeUse& u) { return u.from < u.to ? 1L : -1L; };
     std::uint64_t worst = std::numeric_limits<std::uint64_t>::max();
-    for (const auto& [key, b] : balance)
-      if (b != 0) worst = std::min(worst, key);
+    long worst_balance = 0;
+    for (const auto* edges : {&t.boundary_edges, &t.nonmanifold_edges, &t.misoriented_edges})
+      for (const Edge& e : *edges) {
+        long b = 0;
+        for (const EdgeUse& u : e.uses)
+          if (!out_face[u.face]) b += sign(u);
+        if (b != 0 && edge_key(e.a, e.b) < worst) {
+          worst = edge_key(e.a, e.b);
+          worst_balance = b;
+        }
+      }
     throw UnsupportedInput("edge (" + std::to_string(worst >> 32) + ", " + std::to_string(worst & 0xFFFFFFFFu) +
-                           ") is used " + std::to_string(std::abs(balance[worst])) +
+                           ") is used " + std::to_string(std::abs(worst_balance)) +
                            " more times in one direction than in the other: the surface is not closed "
                            "and consistently oriented, which regularize needs");
   }
-  std::sort(out.begin(), out.end());
   return out;
 }
 
+/// The corner polygon f is fanned from: the first whose fan has no exactly
+/// zero-area triangle (0 if none has).
 std::size_t fan_apex(const Soup& soup, std::size_t f) {
   const FaceView v = soup.face(f);
   const std::size_t n = v.size();

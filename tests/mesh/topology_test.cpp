@@ -1,0 +1,56 @@
+// sheets_to_leave_out: which sheets hang off the rest (walls between solids;
+// with flaps, fins and flaps with free edges) and may be left out so that a
+// surface bounds a volume — and that a hole or the solid itself never is.
+#include <catch2/catch.hpp>
+
+#include "polyheal/mesh/topology.h"
+#include "support/builders.h"
+
+using namespace polyheal;
+
+namespace {
+
+/// The unit box, its face `missing` (if any) left out, and a fin: a
+/// triangle on the box's edge (0,1), its third corner outside the box.
+Soup box_with(int missing, bool fin, bool second_fin_face = false) {
+  const Soup box = test::box({0, 0, 0}, {1, 1, 1});
+  Soup s;
+  s.points = box.points;
+  for (std::size_t f = 0; f < box.face_count(); ++f)
+    if (int(f) != missing) s.add_triangle(box.face(f)[0], box.face(f)[1], box.face(f)[2]);
+  if (fin) {
+    s.points.push_back({0.5, -0.3, -0.3});  // 8
+    s.add_triangle(1, 0, 8);
+    if (second_fin_face) {  // the flap goes on across the fin's free edge 0-8
+      s.points.push_back({-0.2, -0.6, -0.4});  // 9
+      s.add_triangle(0, 9, 8);
+    }
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("sheets_to_leave_out: a fin on a closed box goes, the box stays", "[mesh]") {
+  long left = -1;
+  CHECK(sheets_to_leave_out(box_with(-1, true), true, &left) == std::vector<std::size_t>{12});
+  CHECK(left == 0);
+  const std::vector<std::size_t> flap = sheets_to_leave_out(box_with(-1, true, true), true, &left);
+  CHECK(flap == std::vector<std::size_t>{12, 13});
+  CHECK(left == 0);
+  // Without flaps only walls go (every rim edge with 3+ uses): a fin stays.
+  CHECK(sheets_to_leave_out(box_with(-1, true), false, &left).empty());
+  CHECK(left > 0);
+}
+
+TEST_CASE("sheets_to_leave_out: a hole stays a hole, with or without a fin beside it", "[mesh]") {
+  long left = -1;
+  // The box without its top face 2: the rest is one sheet with free edges
+  // only; it hangs off nothing.
+  CHECK(sheets_to_leave_out(box_with(2, false), true, &left).empty());
+  CHECK(left == 3);
+  // With the fin: the fin goes; then the box's rim edge (0,1) is used by
+  // nothing outside it, so the box, free along its hole, is not a flap.
+  CHECK(sheets_to_leave_out(box_with(2, true), true, &left) == std::vector<std::size_t>{11});
+  CHECK(left == 3);
+}
