@@ -320,12 +320,16 @@ class Pipeline {
   /// three or more uses, free along their other edges (a stray triangle on a
   /// solid's edge). No closed surface can keep them without a volume they
   /// do not have; left out (sheets_to_leave_out), they leave the solid they
-  /// hang off, and they are kept out only when that moves the surface no
+  /// hang off. Only when they are all that keeps the surface from bounding a
+  /// volume (what is left balances: holes are clean's, and leaving flaps
+  /// out beside them only sends a surface the grid would close anyway
+  /// through local moves first), and only when that moves the surface no
   /// more than --max-deviation (a larger sheet is the grid's: it wraps it).
   void flaps() {
     const Soup welded = apply_weld(cur_.soup, weld_identical_points(cur_.soup.points));
-    const std::vector<std::size_t> out = sheets_to_leave_out(welded, true);
-    if (out.empty()) return;
+    long left = 0;
+    const std::vector<std::size_t> out = sheets_to_leave_out(welded, true, &left);
+    if (out.empty() || left > 0) return;
     stage(
         "flaps",
         [&](StageReport& s) {
