@@ -32,25 +32,29 @@ Soup box_with(int missing, bool fin, bool second_fin_face = false) {
 }  // namespace
 
 TEST_CASE("sheets_to_leave_out: a fin on a closed box goes, the box stays", "[mesh]") {
-  long left = -1;
-  CHECK(sheets_to_leave_out(box_with(-1, true), true, &left) == std::vector<std::size_t>{12});
-  CHECK(left == 0);
-  const std::vector<std::size_t> flap = sheets_to_leave_out(box_with(-1, true, true), true, &left);
-  CHECK(flap == std::vector<std::size_t>{12, 13});
-  CHECK(left == 0);
-  // Without flaps only walls go (every rim edge with 3+ uses): a fin stays.
-  CHECK(sheets_to_leave_out(box_with(-1, true), false, &left).empty());
-  CHECK(left > 0);
+  SheetsLeftOut r = sheets_to_leave_out(box_with(-1, true), true);
+  CHECK(r.faces == std::vector<std::size_t>{12});
+  CHECK(r.imbalance == 0);
+  r = sheets_to_leave_out(box_with(-1, true, true), true);
+  CHECK(r.faces == std::vector<std::size_t>{12, 13});
+  CHECK(r.imbalance == 0);
+  // Without flaps only walls go (every rim edge with 3+ uses): a fin stays,
+  // and the edge named is the fin's smallest unbalanced one, (0, 1).
+  r = sheets_to_leave_out(box_with(-1, true), false);
+  CHECK(r.faces.empty());
+  CHECK(r.imbalance == 3);
+  CHECK((r.unbalanced_a == 0 && r.unbalanced_b == 1 && r.unbalanced_by == 1));
 }
 
 TEST_CASE("sheets_to_leave_out: a hole stays a hole, with or without a fin beside it", "[mesh]") {
-  long left = -1;
   // The box without its top face 2: the rest is one sheet with free edges
   // only; it hangs off nothing.
-  CHECK(sheets_to_leave_out(box_with(2, false), true, &left).empty());
-  CHECK(left == 3);
+  SheetsLeftOut r = sheets_to_leave_out(box_with(2, false), true);
+  CHECK(r.faces.empty());
+  CHECK(r.imbalance == 3);
   // With the fin: the fin goes; then the box's rim edge (0,1) is used by
   // nothing outside it, so the box, free along its hole, is not a flap.
-  CHECK(sheets_to_leave_out(box_with(2, true), true, &left) == std::vector<std::size_t>{11});
-  CHECK(left == 3);
+  r = sheets_to_leave_out(box_with(2, true), true);
+  CHECK(r.faces == std::vector<std::size_t>{11});
+  CHECK(r.imbalance == 3);
 }

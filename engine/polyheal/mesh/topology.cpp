@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <unordered_map>
@@ -157,7 +158,7 @@ Topology analyze_topology(const Soup& soup) {
   return t;
 }
 
-std::vector<std::size_t> sheets_to_leave_out(const Soup& soup, bool flaps, long* imbalance_left) {
+SheetsLeftOut sheets_to_leave_out(const Soup& soup, bool flaps) {
   const Topology t = analyze_topology(soup);
   auto key = [](Index a, Index b) { return (std::uint64_t(std::min(a, b)) << 32) | std::max(a, b); };
   auto sign = [](const EdgeUse& u) { return u.from < u.to ? 1L : -1L; };
@@ -175,7 +176,8 @@ std::vector<std::size_t> sheets_to_leave_out(const Soup& soup, bool flaps, long*
       r.uses = r.input_uses = e.uses.size();
       total += std::abs(r.balance);
     }
-  std::vector<std::size_t> out;
+  SheetsLeftOut result;
+  std::vector<std::size_t>& out = result.faces;
   if (total > 0) {
     UnionFind sheet_of(soup.face_count());
     for (const Topology::InteriorEdge& e : t.interior_edges) sheet_of.unite(e.face0, e.face1);
@@ -233,9 +235,19 @@ std::vector<std::size_t> sheets_to_leave_out(const Soup& soup, bool flaps, long*
       }
     }
   }
-  if (imbalance_left) *imbalance_left = total;
+  result.imbalance = total;
+  if (total > 0) {
+    std::uint64_t worst = std::numeric_limits<std::uint64_t>::max();
+    for (const auto& [k, r] : rims)
+      if (r.balance != 0 && k < worst) {
+        worst = k;
+        result.unbalanced_by = std::abs(r.balance);
+      }
+    result.unbalanced_a = Index(worst >> 32);
+    result.unbalanced_b = Index(worst & 0xFFFFFFFFu);
+  }
   std::sort(out.begin(), out.end());
-  return out;
+  return result;
 }
 
 }  // namespace polyheal

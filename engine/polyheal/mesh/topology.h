@@ -63,8 +63,15 @@ Topology analyze_topology(const Soup& soup);
 /// by none (a free edge: a fin or flap hanging off a solid along its other
 /// rim edges, of which it needs one). So a hole stays a hole (its rim is
 /// used once by the faces around it) and faces turned the wrong way stay
-/// (two uses in one direction: an orientation defect). Sorted face ids;
-/// `imbalance_left` (if given) gets the total imbalance of what is kept.
-std::vector<std::size_t> sheets_to_leave_out(const Soup& soup, bool flaps, long* imbalance_left = nullptr);
+/// (two uses in one direction: an orientation defect).
+struct SheetsLeftOut {
+  std::vector<std::size_t> faces;  // sorted
+  long imbalance = 0;              // of what is kept
+  /// When imbalance > 0: the smallest edge (a < b) what is kept still uses
+  /// more often one way than the other, and by how much.
+  Index unbalanced_a = 0, unbalanced_b = 0;
+  long unbalanced_by = 0;
+};
+SheetsLeftOut sheets_to_leave_out(const Soup& soup, bool flaps);
 
 }  // namespace polyheal

@@ -246,21 +246,19 @@ class Pipeline {
                        std::string("kept: as far from the input, but moves the surface less");
         }
       }
-      if (better && only_within && !within_limit(next, next_fills)) {
-        better = false;
-        s.outcome += (s.outcome.empty() ? "" : "; ") +
-                     std::string("not kept: the surface moves more than --max-deviation");
-      }
+      const bool beyond_limit = better && only_within && !within_limit(next, next_fills);
+      if (beyond_limit) better = false;
       if (better) {
         s.accepted = true;
         cur_ = std::move(next);
         if (!pending_fills_.empty()) result_.hole_fills = std::move(pending_fills_);
-      } else if (s.outcome.find("not kept: ") == std::string::npos) {
+      } else {
         s.outcome += (s.outcome.empty() ? "" : "; ") + std::string("not kept: ") +
-                     (empty     ? std::string("no face left")
-                      : both_ok ? "another topology than, or farther from the input than, the current surface"
-                                : std::to_string(next.defects) + " defects after, " + std::to_string(cur_.defects) +
-                                      " before");
+                     (beyond_limit ? std::string("the surface moves more than --max-deviation")
+                      : empty      ? std::string("no face left")
+                      : both_ok    ? "another topology than, or farther from the input than, the current surface"
+                                   : std::to_string(next.defects) + " defects after, " +
+                                         std::to_string(cur_.defects) + " before");
       }
     } catch (const UnsupportedInput& e) {
       s.outcome = std::string("refused: ") + e.what();
@@ -327,9 +325,9 @@ class Pipeline {
   /// more than --max-deviation (a larger sheet is the grid's: it wraps it).
   void flaps() {
     const Soup welded = apply_weld(cur_.soup, weld_identical_points(cur_.soup.points));
-    long left = 0;
-    const std::vector<std::size_t> out = sheets_to_leave_out(welded, true, &left);
-    if (out.empty() || left > 0) return;
+    const SheetsLeftOut sheets = sheets_to_leave_out(welded, true);
+    const std::vector<std::size_t>& out = sheets.faces;
+    if (out.empty() || sheets.imbalance > 0) return;
     stage(
         "flaps",
         [&](StageReport& s) {

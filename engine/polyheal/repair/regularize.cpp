@@ -1145,31 +1145,13 @@ void split_pinches(const Soup& input, bool input_manifold, RegularizeResult& res
 /// already. Throws UnsupportedInput, naming an edge, when what is left still
 /// does not balance.
 std::vector<std::size_t> walls_to_leave_out(const Soup& s) {
-  long left = 0;
-  std::vector<std::size_t> out = sheets_to_leave_out(s, false, &left);
-  if (left > 0) {
-    const Topology t = analyze_topology(s);
-    std::vector<char> out_face(s.face_count(), 0);
-    for (std::size_t f : out) out_face[f] = 1;
-    auto sign = [](const EdgeUse& u) { return u.from < u.to ? 1L : -1L; };
-    std::uint64_t worst = std::numeric_limits<std::uint64_t>::max();
-    long worst_balance = 0;
-    for (const auto* edges : {&t.boundary_edges, &t.nonmanifold_edges, &t.misoriented_edges})
-      for (const Edge& e : *edges) {
-        long b = 0;
-        for (const EdgeUse& u : e.uses)
-          if (!out_face[u.face]) b += sign(u);
-        if (b != 0 && edge_key(e.a, e.b) < worst) {
-          worst = edge_key(e.a, e.b);
-          worst_balance = b;
-        }
-      }
-    throw UnsupportedInput("edge (" + std::to_string(worst >> 32) + ", " + std::to_string(worst & 0xFFFFFFFFu) +
-                           ") is used " + std::to_string(std::abs(worst_balance)) +
+  SheetsLeftOut walls = sheets_to_leave_out(s, false);
+  if (walls.imbalance > 0)
+    throw UnsupportedInput("edge (" + std::to_string(walls.unbalanced_a) + ", " + std::to_string(walls.unbalanced_b) +
+                           ") is used " + std::to_string(walls.unbalanced_by) +
                            " more times in one direction than in the other: the surface is not closed "
                            "and consistently oriented, which regularize needs");
-  }
-  return out;
+  return std::move(walls.faces);
 }
 
 /// The corner polygon f is fanned from: the first whose fan has no exactly
