@@ -9,7 +9,6 @@
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
-#include <unordered_set>
 #include <numeric>
 
 #include "polyheal/inspect/nesting.h"
@@ -737,13 +736,11 @@ Assessment assess(const Soup& input, const Report& in, const Soup& written, doub
     // The surface moved: how far the output is from the input, but for
     // faces spanning input vertices only (hole fills), and the input, but
     // for what the output encloses, from the output.
-    // A fill a later stage split (regularize cuts faces along the curves
-    // where they cross) is still a fill: a face whose corners all lie on
-    // one fill triangle, within the measurement's error bound, lies on it
-    // (the distance to a triangle is convex). Fills are measured apart
-    // (fill_distance), not left out.
-    std::unordered_set<CornerKey, CornerKeyHash> fill_keys;
-    for (const std::array<Point3d, 3>& t : hole_fills) fill_keys.insert(corner_key({t.begin(), t.end()}));
+    // A fill face is one whose corners all lie on one fill triangle, within
+    // the measurement's error bound (then it lies on it: the distance to a
+    // triangle is convex): the fill itself, or a piece of it a later stage
+    // cut (regularize cuts faces along the curves where they cross). Fills
+    // are measured apart (fill_distance), not left out.
     const std::unique_ptr<detail::SurfaceDistance> fill_surface =
         hole_fills.empty() ? nullptr : std::make_unique<detail::SurfaceDistance>(hole_fills);
     const double on_fill2 = a.error_bound * a.error_bound;
@@ -764,7 +761,7 @@ Assessment assess(const Soup& input, const Report& in, const Soup& written, doub
     moved.points = fills.points = written.points;
     for (std::size_t f = 0; f < written.face_count(); ++f) {
       const FaceView v = written.face(f);
-      const bool fill = v.size() == 3 && (fill_keys.count(corner_key(written, f)) > 0 || (fill_surface && on_one_fill(v)));
+      const bool fill = v.size() == 3 && fill_surface && on_one_fill(v);
       (fill ? fills : moved).add_face(v.begin(), v.end());
     }
     double output_moved = moved.face_count() ? detail::one_sided_distances(moved, input, a.error_bound)[0] : 0.0;
