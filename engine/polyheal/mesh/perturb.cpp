@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/vec3.h"
 #include "polyheal/mesh/weld.h"
 
@@ -132,7 +133,7 @@ PerturbResult perturb(const Soup& input, const PerturbOptions& o) {
     for (std::size_t t = 0; t < tris.size(); ++t)
       for (int k = 0; k < 3; ++k) {
         Index a = tris[t][k], b = tris[t][(k + 1) % 3];
-        uses[(std::uint64_t(std::min(a, b)) << 32) | std::max(a, b)].push_back({t, k});
+        uses[undirected_edge_key(a, b)].push_back({t, k});
       }
     std::vector<std::array<std::pair<std::size_t, int>, 2>> edges;
     for (const auto& [key, u] : uses)

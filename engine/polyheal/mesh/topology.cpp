@@ -160,7 +160,6 @@ Topology analyze_topology(const Soup& soup) {
 
 SheetsLeftOut sheets_to_leave_out(const Soup& soup, bool flaps) {
   const Topology t = analyze_topology(soup);
-  auto key = [](Index a, Index b) { return (std::uint64_t(std::min(a, b)) << 32) | std::max(a, b); };
   auto sign = [](const EdgeUse& u) { return u.from < u.to ? 1L : -1L; };
   struct Rim {
     long balance = 0;       // uses one way minus the other, by kept faces
@@ -171,7 +170,7 @@ SheetsLeftOut sheets_to_leave_out(const Soup& soup, bool flaps) {
   long total = 0;
   for (const auto* edges : {&t.boundary_edges, &t.nonmanifold_edges, &t.misoriented_edges})
     for (const Edge& e : *edges) {
-      Rim& r = rims[key(e.a, e.b)];
+      Rim& r = rims[undirected_edge_key(e.a, e.b)];
       for (const EdgeUse& u : e.uses) r.balance += sign(u);
       r.uses = r.input_uses = e.uses.size();
       total += std::abs(r.balance);
@@ -191,7 +190,7 @@ SheetsLeftOut sheets_to_leave_out(const Soup& soup, bool flaps) {
     for (const auto* edges : {&t.boundary_edges, &t.nonmanifold_edges, &t.misoriented_edges})
       for (const Edge& e : *edges)
         for (const EdgeUse& u : e.uses) {
-          auto& [net, uses] = by_root[sheet_of.find(u.face)].rim[key(e.a, e.b)];
+          auto& [net, uses] = by_root[sheet_of.find(u.face)].rim[undirected_edge_key(e.a, e.b)];
           net += sign(u);
           ++uses;
         }

@@ -48,6 +48,11 @@ struct Topology {
 /// Analyses `soup` (indices as given: weld first for positional sharing).
 Topology analyze_topology(const Soup& soup);
 
+/// The key of the edge {a, b}, either way round: (min << 32) | max.
+inline std::uint64_t undirected_edge_key(Index a, Index b) {
+  return a < b ? (std::uint64_t(a) << 32) | b : (std::uint64_t(b) << 32) | a;
+}
+
 /// The faces to leave out so that `soup` (welded) comes nearer to bounding a
 /// volume — every edge used as often in each direction — when sheets that
 /// hang off the rest are what stops it.

@@ -31,11 +31,6 @@ using P3 = K::Point_3;
 using SMesh = CGAL::Surface_mesh<P3>;
 using Tri = std::array<Index, 3>;
 
-std::uint64_t edge_key(Index a, Index b) {
-  if (a > b) std::swap(a, b);
-  return (std::uint64_t(a) << 32) | b;
-}
-
 /// Sign of the volume a closed triangle set encloses, exactly
 /// (enclosed_volume_sign: intervals, then rationals) — over
 /// orient_polygon_soup's points, which renumber the input's.
@@ -144,7 +139,7 @@ std::size_t split_t_junctions(const std::vector<Point3d>& pts, std::vector<Tri>&
     std::unordered_map<std::uint64_t, int> uses;
     for (std::size_t f = 0; f < tris.size(); ++f)
       for (int k = 0; k < 3; ++k) {
-        const std::uint64_t e = edge_key(tris[f][k], tris[f][(k + 1) % 3]);
+        const std::uint64_t e = undirected_edge_key(tris[f][k], tris[f][(k + 1) % 3]);
         if (++uses[e] == 1) once[e] = {f, k};
       }
     std::vector<std::pair<std::size_t, int>> border;  // (face, corner): edge corner -> corner+1
@@ -354,7 +349,7 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
     r.split_vertices = pts.size() - points_before;
     std::unordered_map<std::uint64_t, std::vector<std::size_t>> uses;
     for (std::size_t f = 0; f < polys.size(); ++f)
-      for (int k = 0; k < 3; ++k) uses[edge_key(Index(polys[f][k]), Index(polys[f][(k + 1) % 3]))].push_back(f);
+      for (int k = 0; k < 3; ++k) uses[undirected_edge_key(Index(polys[f][k]), Index(polys[f][(k + 1) % 3]))].push_back(f);
     UnionFind uf(polys.size());
     std::vector<char> open_component_face(polys.size(), 0);
     for (const auto& [e, u] : uses) {

@@ -62,11 +62,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-std::uint64_t edge_key(Index a, Index b) {
-  if (a > b) std::swap(a, b);
-  return (std::uint64_t(a) << 32) | b;
-}
-
 struct XyzLess {
   bool operator()(const EPoint& a, const EPoint& b) const { return CGAL::compare_xyz(a, b) == CGAL::SMALLER; }
 };
@@ -131,7 +126,7 @@ class Regularizer {
         pieces_.back().alive = false;
         pieces_.back().state = kInvalid;
       }
-      for (int e = 0; e < 3; ++e) face_edges_.push_back({edge_key(fv[e], fv[(e + 1) % 3]), Index(f)});
+      for (int e = 0; e < 3; ++e) face_edges_.push_back({undirected_edge_key(fv[e], fv[(e + 1) % 3]), Index(f)});
     }
     tbb::parallel_sort(face_edges_.begin(), face_edges_.end());
     for (int k = 0; k < 3; ++k) below_[k] = report.bbox_min[k] - (1.0 + std::abs(report.bbox_min[k]));
@@ -389,9 +384,9 @@ class Regularizer {
           const Index other = around[0] == p ? around[1] : around[0];
           if (traverses(other, b, a) && pieces_[other].weight == piece.weight) next.push_back({other, piece.front});
         } else if (around.size() > 2) {
-          if (river_done_.count(edge_key(a, b))) continue;  // every piece around is classified
+          if (river_done_.count(undirected_edge_key(a, b))) continue;  // every piece around is classified
           around_windings(p, a, b, around, piece.state == kValid, next);
-          if (!next.empty()) river_done_.insert(edge_key(a, b));
+          if (!next.empty()) river_done_.insert(undirected_edge_key(a, b));
         }
         if (piece.state == kValid && std::none_of(next.begin(), next.end(), [&](const auto& n) {
               return traverses(n.first, b, a) && n.second <= 0 && n.second + pieces_[n.first].weight >= 1;
@@ -423,7 +418,7 @@ class Regularizer {
   /// The live pieces with edge ab. With `complete`, an input triangle among
   /// them that intersects others is split first (its pieces take its place).
   Ids pieces_around(Index a, Index b, bool complete) {
-    const std::uint64_t key = edge_key(a, b);
+    const std::uint64_t key = undirected_edge_key(a, b);
     for (;;) {
       Ids out;
       Ids candidates = faces_with_edge(key);  // input faces (pieces 0..F-1), alive or not
@@ -530,7 +525,7 @@ class Regularizer {
       for (Index u : partners_[m]) split(u);
       const FaceView fv = soup_.face(m);
       for (int e = 0; e < 3; ++e)
-        for (Index n : faces_with_edge(edge_key(fv[e], fv[(e + 1) % 3])))
+        for (Index n : faces_with_edge(undirected_edge_key(fv[e], fv[(e + 1) % 3])))
           if (!partners_[n].empty()) split(n);
     }
   }
@@ -642,7 +637,7 @@ class Regularizer {
       piece.weight = std::abs(count);
       pieces_.push_back(piece);
       made.push_back(q);
-      for (int e = 0; e < 3; ++e) edges_[edge_key(v[e], v[(e + 1) % 3])].push_back(q);
+      for (int e = 0; e < 3; ++e) edges_[undirected_edge_key(v[e], v[(e + 1) % 3])].push_back(q);
     }
     for (Index m : cluster) subs_[m] = made;
     r_.sub_triangles += made.size();
@@ -737,7 +732,7 @@ class Regularizer {
   /// The intersection of input triangles t and u as global vertex ids (one
   /// point or a segment's two ends), constructed once per pair (§3.2).
   const std::vector<Index>& segment(Index t, Index u) {
-    const auto [it, inserted] = segments_.try_emplace(edge_key(t, u));
+    const auto [it, inserted] = segments_.try_emplace(undirected_edge_key(t, u));
     if (!inserted) return it->second;
     ++r_.segments;
     if (generic_segment(t, u, it->second)) return it->second;
@@ -847,7 +842,7 @@ class Regularizer {
       for (int c = 0; c < 3; ++c)
         if (h->info().id == std::int64_t(fv[c])) corner[c] = h;
     for (int e = 0; e < 3; ++e) {
-      const auto it = on_edge_.find(edge_key(fv[e], fv[(e + 1) % 3]));
+      const auto it = on_edge_.find(undirected_edge_key(fv[e], fv[(e + 1) % 3]));
       if (it == on_edge_.end()) continue;
       std::vector<Index> pts = it->second;
       std::sort(pts.begin(), pts.end());
@@ -878,14 +873,14 @@ class Regularizer {
   /// The point where edge pq crosses the plane of input face w (exact), by
   /// name: computed once per (edge, face).
   Index edge_crossing(Index p, Index q, Index w) {
-    const auto [it, inserted] = crossings_.try_emplace({edge_key(p, q), w}, Index(0));
+    const auto [it, inserted] = crossings_.try_emplace({undirected_edge_key(p, q), w}, Index(0));
     if (!inserted) return it->second;
     const FaceView wv = soup_.face(w);
     const EPoint &w0 = points_[wv[0]], &P = points_[p], &Q = points_[q];
     const EVector n = CGAL::cross_product(points_[wv[1]] - w0, points_[wv[2]] - w0);
     const K::FT dp = n * (P - w0), dq = n * (Q - w0);
     it->second = vertex_id(P + (Q - P) * (dp / (dp - dq)));
-    on_edge_[edge_key(p, q)].push_back(it->second);
+    on_edge_[undirected_edge_key(p, q)].push_back(it->second);
     return it->second;
   }
 
