@@ -112,10 +112,20 @@ class Pipeline {
     // Self-intersections: local moves first; on a closed surface the union
     // (regularization) of what they left, and of the surface before them —
     // whichever certified result is closer to the input is kept.
+    // The union of the surface before them is not computed when they moved
+    // it no farther than the measure's bound (Hausdorff, before to after, by
+    // the triangle inequality through the input): moving each surface point
+    // by at most m moves a union's boundary and what it absorbs by at most
+    // m, so the two unions are as far from the input and move the surface as
+    // much, within the bound — a tie, which the current surface keeps. On
+    // three overlapping copies of a 1M-face knot that union and its
+    // assessment took 52 of 114 s.
     std::optional<Soup> before_moves;  // the closed surface local moves started from
     if (wanted(kStepDeintersect) && !done() && !cur_.report.self_intersections.empty()) {
+      const double before = cur_.hausdorff;
       if (cur_.report.closed) before_moves = cur_.soup;
-      if (!deintersect().accepted) before_moves.reset();
+      const StageReport& moves = deintersect();
+      if (!moves.accepted || before + moves.hausdorff <= measure_bound()) before_moves.reset();
     }
     if (wanted(kStepRegularize)) {
       if (!done() && !cur_.report.certified_clean() && cur_.report.closed) regularize(cur_.soup, "regularize");
@@ -167,6 +177,9 @@ class Pipeline {
   }
 
   double deviation_limit() const { return max_deviation_of(o_, result_.report.diagonal); }
+  /// The error bound of the stages' Hausdorff distances to the input: two
+  /// surfaces closer than it to each other are a tie.
+  double measure_bound() const { return 1e-4 * result_.report.diagonal; }
 
   /// What the exit code asks of the written file (assess()): the surface
   /// moved no more than the limit and no input component was dropped.
@@ -200,7 +213,7 @@ class Pipeline {
       s.faces_out = next.soup.face_count();
       s.defects_after = next.defects;
       const bool next_ok = certified(next.report, o_.for_tetgen);
-      const double bound = 1e-4 * result_.report.diagonal;
+      const double bound = measure_bound();
       next.hausdorff = detail::hausdorff_distance(input_, next.soup, bound);
       s.hausdorff = next.hausdorff;
       // Better: certified where the current surface is not; when both are,
