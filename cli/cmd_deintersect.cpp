@@ -89,7 +89,7 @@ nlohmann::json to_json(const DeintersectArgs& a, const DeintersectReport& r, dou
       {"operations", {{"swaps", r.swaps}, {"hammers", r.hammers}, {"lifts", r.lifts},
                       {"group_moves", r.group_moves},
                       {"pair_moves", r.pair_moves}, {"trials", r.trials},
-                      {"stale", r.stale}}},
+                      {"stale", r.stale}, {"sources_skipped", r.sources_skipped}}},
       {"rounds", r.rounds},
       {"topology", {{"input", topology_json(r.topology_in)}, {"output", topology_json(r.topology_out)}}},
       {"faces_changed", r.faces_changed},
@@ -119,8 +119,8 @@ void print_text(const DeintersectArgs& a, const DeintersectReport& r) {
   std::printf("  intersecting faces: %zu -> %zu (pairs %zu -> %zu)\n", r.intersecting_faces_in, r.intersecting_faces_out,
               r.intersecting_pairs_in, r.intersecting_pairs_out);
   std::printf("  operations: %zu swaps, %zu hammers, %zu lifts, %zu group moves, %zu pair moves in %d rounds (%zu trials, "
-              "%zu stale)\n",
-              r.swaps, r.hammers, r.lifts, r.group_moves, r.pair_moves, r.rounds, r.trials, r.stale);
+              "%zu stale, %zu sources skipped)\n",
+              r.swaps, r.hammers, r.lifts, r.group_moves, r.pair_moves, r.rounds, r.trials, r.stale, r.sources_skipped);
   std::printf("  moved %zu vertices: max %.6g (%.3g%% of the bbox diagonal), mean %.6g; %zu faces changed\n",
               r.moved_vertices, r.max_displacement, 100.0 * r.max_displacement / diag, r.mean_displacement,
               r.faces_changed);

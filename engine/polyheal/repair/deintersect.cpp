@@ -2,12 +2,16 @@
 
 #include <CGAL/boost/graph/Euler_operations.h>
 #include <CGAL/boost/graph/helpers.h>
+#include <CGAL/Bbox_3.h>
+#include <CGAL/box_intersection_d.h>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numeric>
+#include <map>
 #include <optional>
 #include <set>
 #include <unordered_map>
@@ -121,6 +125,15 @@ class Deintersector {
   std::size_t intersecting_ = 0;                        // faces with a partner
   std::size_t start_ = 0;
   std::unique_ptr<detail::SurfaceDistance> rays_;       // local-thickness mode: this round's surface
+  // Rounds after the first skip the sources of operations (an edge, a
+  // vertex, a face, a group of vertices) that nothing has changed near (see
+  // Sources): their reach in the last cost phase, the boxes of what applied
+  // operations changed since, the reach the running trials grow.
+  using SourceKey = std::vector<std::uint32_t>;  // kind, then vertex or face ids
+  std::map<SourceKey, CGAL::Bbox_3> reach_;
+  std::unordered_map<std::size_t, std::optional<Point>> through_;  // per vertex, with its reach (group_ops)
+  std::vector<CGAL::Bbox_3> dirty_;
+  CGAL::Bbox_3* tracing_ = nullptr;
 
   static std::size_t id(face_descriptor f) { return static_cast<std::size_t>(f); }
 
@@ -153,6 +166,7 @@ class Deintersector {
       partners_[id(g)].push_back(f);
     }
     for (face_descriptor x : affected) intersecting_ += partners_[id(x)].empty() ? 0 : 1;
+    for (face_descriptor x : affected) dirty_.push_back(box({x}));  // their partner lists changed
   }
 
   // ---- geometry helpers -------------------------------------------------
@@ -160,6 +174,13 @@ class Deintersector {
   std::array<vertex_descriptor, 3> corners(face_descriptor f) const {
     const halfedge_descriptor h = mesh_.halfedge(f);
     return {mesh_.source(h), mesh_.target(h), mesh_.target(mesh_.next(h))};
+  }
+  /// The box of `faces` as they are now (interval boxes of the points).
+  CGAL::Bbox_3 box(const std::vector<face_descriptor>& faces) const {
+    CGAL::Bbox_3 b;
+    for (face_descriptor f : faces)
+      for (vertex_descriptor v : corners(f)) b += mesh_.point(v).bbox();
+    return b;
   }
   Vector normal_vector(face_descriptor f) const {
     const auto c = corners(f);
@@ -319,6 +340,7 @@ class Deintersector {
   /// §4.1; with keep, a valid edit's pairs replace the old ones. Returns the
   /// gain; the caller undoes the edit unless it is kept.
   long decide(const std::vector<face_descriptor>& changed, bool shapes_valid, bool swap, bool keep) {
+    if (tracing_) *tracing_ += box(changed);  // where the trial edits and asks the oracle
     if (!shapes_valid) return 0;
     index_.update(changed);
     const auto now = index_.intersections(changed);
@@ -335,13 +357,17 @@ class Deintersector {
     for (face_descriptor f : changed) before.push_back(normal(f));
     const auto unfolded = unfolded_edges(halfedges_of(changed));
     const auto folded = folded_faces(changed);
+    const CGAL::Bbox_3 was = box(changed);
     std::vector<Point> old;
     for (const auto& [v, p] : op.moves) {
       old.push_back(mesh_.point(v));
       mesh_.point(v) = p;
     }
     const long ok = decide(changed, shapes_ok(changed, before, false, unfolded, folded), false, keep);
-    if (ok && keep) return ok;
+    if (ok && keep) {
+      dirty_.push_back(was);
+      return ok;
+    }
     for (std::size_t i = 0; i < op.moves.size(); ++i) mesh_.point(op.moves[i].first) = old[i];
     index_.update(changed);
     return ok;
@@ -362,10 +388,15 @@ class Deintersector {
     const halfedge_descriptor start[2] = {mesh_.halfedge(changed[0]), mesh_.halfedge(changed[1])};
     // The quad's four outer edges keep their halfedges through the flip.
     const auto unfolded = unfolded_edges({mesh_.next(h), mesh_.prev(h), mesh_.next(o), mesh_.prev(o)});
+    const CGAL::Bbox_3 was = box(changed);
+    const std::array<vertex_descriptor, 4> quad{op.a, op.b, c, d};
+    std::array<halfedge_descriptor, 4> around;  // a flip may repoint a vertex's halfedge
+    for (int k = 0; k < 4; ++k) around[k] = mesh_.halfedge(quad[k]);
     CGAL::Euler::flip_edge(h, mesh_);
     const long ok = decide(changed, shapes_ok(changed, before, true, unfolded, {}), true, keep);
     if (ok && keep) {
       if (const auto origin = face_origin_map(mesh_)) (*origin)[changed[0]] = (*origin)[changed[1]] = -1;  // new triangles
+      dirty_.push_back(was);
       return ok;
     }
     // Each flip turns h one step around the quad (ab, cd, ba, dc): three more
@@ -376,6 +407,7 @@ class Deintersector {
     for (int k = 0; k < 3; ++k) CGAL::Euler::flip_edge(h, mesh_);
     mesh_.set_halfedge(changed[0], start[0]);
     mesh_.set_halfedge(changed[1], start[1]);
+    for (int k = 0; k < 4; ++k) mesh_.set_halfedge(quad[k], around[k]);  // circulators start where they did
     index_.update(changed);
     return ok;
   }
@@ -672,11 +704,14 @@ class Deintersector {
         if (seen_vertices.insert(static_cast<std::size_t>(mesh_.target(h))).second) vertices.push_back(mesh_.target(h));
       }
     std::vector<Op> ops;
+    const std::vector<face_descriptor> intersecting = faces;
+    Sources sources(*this);
     if (!o_.swap) edges.clear();
     if (!o_.hammer && !o_.group) vertices.clear();
-    const std::vector<face_descriptor> intersecting = faces;
     if (!o_.lift) faces.clear();
     for (const auto& [a, b] : edges) {
+      const auto [lo, hi] = std::minmax(std::uint32_t(a), std::uint32_t(b));
+      if (!sources.retry({0, lo, hi}, {a, b})) continue;
       Op op;
       op.kind = OpKind::swap;
       op.a = a;
@@ -690,17 +725,100 @@ class Deintersector {
     }
     std::unordered_map<std::size_t, Point> through;  // per vertex: its least through move within the limit
     for (vertex_descriptor v : vertices) {
-      const HammerCandidates c = hammer_candidates(v);
-      if (o_.hammer) cheapest_valid(hammer_ops(v, c), ops);
-      if (const auto p = least_move(v, c.group)) through.emplace(std::size_t(v), *p);
+      std::optional<Point> to;
+      if (!sources.retry({1, std::uint32_t(v)}, {v})) {
+        to = sources.through(v);  // as it was: nothing near v changed
+      } else {
+        const HammerCandidates c = hammer_candidates(v);
+        if (o_.hammer) cheapest_valid(hammer_ops(v, c), ops);
+        to = least_move(v, c.group);
+        sources.set_through(v, to);
+      }
+      if (to) through.emplace(std::size_t(v), *to);
     }
-    if (o_.group) group_ops(vertices, through, ops);
-    for (face_descriptor f : faces) cheapest_valid(lift_ops(f), ops);
-    if (ops.empty() && o_.group)  // the last resorts, see push_ops and pair_ops
+    if (o_.group) group_ops(vertices, through, ops, sources);
+    for (face_descriptor f : faces) {
+      const auto c = corners(f);
+      if (sources.retry({2, std::uint32_t(id(f))}, {c[0], c[1], c[2]})) cheapest_valid(lift_ops(f), ops);
+    }
+    // The last resorts (see push_ops and pair_ops), never skipped: a round
+    // before may not have come to them.
+    sources.done();
+    if (ops.empty() && o_.group)
       for (face_descriptor f : intersecting) cheapest_valid(push_ops(f), ops);
     if (ops.empty() && o_.pair) pair_ops(intersecting, ops);
     return ops;
   }
+
+  /// Which sources of operations a cost phase tries. A source (an edge's
+  /// swap, a vertex's hammer moves, a face's lifts, a group move's
+  /// vertices) tried in the last cost phase reads and edits only its reach:
+  /// the faces two rings round its vertices (the edited stars, the faces
+  /// across their edges that the fold tests read; the faces they intersect
+  /// overlap them) and the boxes its trials' edited faces took (where the
+  /// oracle looks, whose partner lists gain() reads). If no operation
+  /// applied since has touched that reach — no face in it edited, no face
+  /// meeting it with a changed partner list (dirty_) — it would try exactly
+  /// what it tried then on exactly the same surface, and it had no valid
+  /// operation then: one would have been applied (still valid, nothing near
+  /// having changed), touching it. So it has none now and is skipped,
+  /// keeping its reach (and a vertex its through move). Trials restore the
+  /// surface exactly (try_swap), so skipping one changes no other. Not with
+  /// local-thickness clearances: the rays see the whole surface.
+  class Sources {
+   public:
+    explicit Sources(Deintersector& d) : d_(d), last_(std::move(d.reach_)), last_through_(std::move(d.through_)) {
+      d.reach_.clear();
+      d.through_.clear();
+      if (d.o_.clearance_mode == ClearanceMode::local_thickness || !d.o_.skip_unchanged) last_.clear();
+      if (last_.empty() || d.dirty_.empty()) return;
+      using Box =
+          CGAL::Box_intersection_d::Box_with_info_d<double, 3, const SourceKey*, CGAL::Box_intersection_d::ID_EXPLICIT>;
+      std::vector<Box> reaches, dirty;
+      for (const auto& [key, box] : last_) reaches.emplace_back(box, &key);
+      for (const CGAL::Bbox_3& b : d.dirty_) dirty.emplace_back(b, nullptr);
+      CGAL::box_intersection_d(reaches.begin(), reaches.end(), dirty.begin(), dirty.end(),
+                               [&](const Box& r, const Box&) { touched_.insert(r.info()); });
+    }
+    /// Does the source `key` with vertices `vs` need its trials? If so, the
+    /// trials until the next call grow its reach.
+    bool retry(const SourceKey& key, std::initializer_list<vertex_descriptor> vs) {
+      return retry(key, std::vector<vertex_descriptor>(vs));
+    }
+    bool retry(const SourceKey& key, const std::vector<vertex_descriptor>& vs) {
+      const auto it = last_.find(key);
+      if (it != last_.end() && !touched_.count(&it->first)) {
+        d_.reach_.emplace(key, it->second);
+        d_.tracing_ = nullptr;
+        ++d_.r_.sources_skipped;
+        return false;
+      }
+      CGAL::Bbox_3& reach = d_.reach_[key];
+      for (vertex_descriptor v : vs)
+        for (vertex_descriptor w : CGAL::vertices_around_target(d_.mesh_.halfedge(v), d_.mesh_))
+          for (vertex_descriptor x : CGAL::vertices_around_target(d_.mesh_.halfedge(w), d_.mesh_))
+            reach += d_.mesh_.point(x).bbox();
+      d_.tracing_ = &reach;
+      return true;
+    }
+    std::optional<Point> through(vertex_descriptor v) const {
+      const auto it = last_through_.find(std::size_t(v));
+      d_.through_[std::size_t(v)] = it->second;
+      return it->second;
+    }
+    void set_through(vertex_descriptor v, const std::optional<Point>& p) { d_.through_[std::size_t(v)] = p; }
+    /// The trials after this are no source's; what is applied from here on is new.
+    void done() {
+      d_.tracing_ = nullptr;
+      d_.dirty_.clear();
+    }
+
+   private:
+    Deintersector& d_;
+    std::map<SourceKey, CGAL::Bbox_3> last_;
+    std::unordered_map<std::size_t, std::optional<Point>> last_through_;
+    std::set<const SourceKey*> touched_;
+  };
 
   /// Of the positions `to` for v (exact constructions), the rounded one
   /// nearest v within the displacement limit; none for a pinned vertex.
@@ -727,7 +845,7 @@ class Deintersector {
   /// own through position (`HammerCandidates::group`), as one operation
   /// under the same criteria.
   void group_ops(const std::vector<vertex_descriptor>& vertices,
-                 const std::unordered_map<std::size_t, Point>& through, std::vector<Op>& ops) {
+                 const std::unordered_map<std::size_t, Point>& through, std::vector<Op>& ops, Sources& sources) {
     std::unordered_set<std::size_t> done;
     for (vertex_descriptor seed : vertices) {
       if (!through.count(std::size_t(seed)) || !done.insert(std::size_t(seed)).second) continue;
@@ -744,6 +862,12 @@ class Deintersector {
           if (through.count(std::size_t(w)) && done.insert(std::size_t(w)).second) todo.push_back(w);
       }
       if (op.moves.size() < 2) continue;  // a single vertex: one of its hammer ops
+      std::vector<vertex_descriptor> members;
+      for (const auto& m : op.moves) members.push_back(m.first);
+      SourceKey key{3};
+      for (vertex_descriptor v : members) key.push_back(std::uint32_t(v));
+      std::sort(key.begin() + 1, key.end());
+      if (!sources.retry(key, members)) continue;
       op.cost = move_cost(op);
       if (try_op(op, false) > 0) ops.push_back(op);
     }

@@ -74,6 +74,9 @@ struct DeintersectOptions {
   double max_displacement_ratio = 0.02;
   bool swap = true, hammer = true, lift = true;  // which operations to use (the paper's) ...
   bool group = true, pair = true;                // ... and ours: group and pair moves (deintersect.cpp)
+  /// Rounds after the first skip what nothing has changed near since it
+  /// was last tried (the same result; false: retry everything, to compare).
+  bool skip_unchanged = true;
   bool certify = true;      // certify the rounded result (callers that certify the written file say false)
   /// Every intersecting pair of the input, sorted, when the caller has
   /// found them already (InspectOptions::self_intersections).
@@ -95,6 +98,7 @@ struct DeintersectReport {
   // repair
   std::size_t swaps = 0, hammers = 0, lifts = 0, group_moves = 0, pair_moves = 0;
   std::size_t trials = 0;            // operations tried (cost phases and re-validations)
+  std::size_t sources_skipped = 0;   // edges, vertices, faces, groups a cost phase did not retry: nothing near changed
   std::size_t stale = 0;             // cost-phase operations no longer valid when their turn came
   int rounds = 0;
   std::size_t intersecting_faces_exact = 0;  // left in the working mesh, before writing
