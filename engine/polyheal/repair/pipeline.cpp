@@ -128,7 +128,8 @@ class Pipeline {
       if (!moves.accepted || before + moves.hausdorff <= measure_bound()) before_moves.reset();
     }
     if (wanted(kStepRegularize)) {
-      if (!done() && !cur_.report.certified_clean() && cur_.report.closed) regularize(cur_.soup, "regularize");
+      if (!done() && !cur_.report.certified_clean() && cur_.report.closed)
+        regularize(cur_.soup, "regularize", &cur_.report.self_intersections);
       if (before_moves) regularize(*before_moves, "regularize (without local moves)");
     }
     // TetGen's tolerances (for_tetgen): nearly degenerate faces and sharp
@@ -505,6 +506,7 @@ class Pipeline {
       DeintersectOptions d;
       d.certify = false;
       d.observer = o_.observer;
+      d.known_pairs = &cur_.report.self_intersections;
       DeintersectResult res = remove_self_intersections(cur_.soup, d);
       const DeintersectReport& r = res.report;
       s.max_displacement = r.max_displacement;
@@ -525,7 +527,8 @@ class Pipeline {
     });
   }
 
-  void regularize(const Soup& from, const char* name) {
+  /// `pairs`: from's intersecting pairs, when known (they are searched for otherwise).
+  void regularize(const Soup& from, const char* name, const std::vector<FacePair>* pairs = nullptr) {
     // A closed surface that encloses negative volume (exact sign) is inside
     // out whatever its overlaps: its union is empty (winding numbers <= 0),
     // and the union of the surface turned outwards is what it stands for.
@@ -537,6 +540,7 @@ class Pipeline {
       RegularizeOptions ro;
       ro.certify = false;
       ro.observer = o_.observer;
+      ro.known_pairs = pairs;  // a reversed surface crosses itself where it did
       RegularizeResult res = polyheal::regularize(turn ? reversed(from) : from, ro);
       const RegularizeReport& r = res.report;
       s.counts = {{"intersecting_pairs_in", double(r.intersecting_pairs_in)},

@@ -1196,7 +1196,9 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
         polygon.push_back(f);
       }
     }
-    RegularizeResult result = regularize(fanned, o);
+    RegularizeOptions inner = o;
+    inner.known_pairs = nullptr;  // the fan's faces are not the input's
+    RegularizeResult result = regularize(fanned, inner);
     for (std::size_t& f : result.source_face) f = polygon[f];
     result.report.faces = raw.face_count();
     for (std::size_t f = 0; f < raw.face_count(); ++f) result.report.polygons_fanned += raw.face(f).size() > 3 ? 1 : 0;
@@ -1226,6 +1228,7 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
     if (rest.face_count() == 0) throw UnsupportedInput("no faces are left once the walls are left out");
     RegularizeOptions inner = o;
     inner.certify = false;
+    inner.known_pairs = nullptr;  // fewer faces: other indices
     RegularizeResult result = regularize(rest, inner);
     for (std::size_t& f : result.source_face) f = kept[f];
     result.report.faces = raw.face_count();
@@ -1235,6 +1238,7 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   }
   InspectOptions io;
   io.observer = o.observer;
+  io.self_intersections = o.known_pairs;
   const Report in = inspect(input, io);
   r.zero_area_faces = in.degenerate_faces.size();
   r.faces = in.faces;

@@ -90,6 +90,9 @@ struct RegularizeOptions {
   bool certify = true;  // certify the rounded result (callers that certify the written file say false)
   int max_passes = 3;   // regularizations of the rounded result while rounding leaves crossings
   Observer* observer = nullptr;
+  /// Every intersecting pair of the input, as inspect() reports them, when
+  /// the caller has them already (InspectOptions::self_intersections).
+  const std::vector<FacePair>* known_pairs = nullptr;
 };
 
 struct RegularizeReport {
