@@ -781,9 +781,9 @@ Assessment assess(const Soup& input, const Report& in, const Soup& written, doub
       const bool fill = v.size() == 3 && fill_surface && on_one_fill(v);
       (fill ? fills : moved).add_face(v.begin(), v.end());
     }
-    double output_moved = moved.face_count() ? detail::one_sided_distances(moved, input, a.error_bound)[0] : 0.0;
+    double output_moved = moved.face_count() ? detail::one_sided_distance(moved, input, a.error_bound) : 0.0;
     a.fill_faces = fills.face_count();
-    if (fills.face_count()) a.fill_distance = detail::one_sided_distances(fills, input, a.error_bound)[0];
+    if (fills.face_count()) a.fill_distance = detail::one_sided_distance(fills, input, a.error_bound);
     // The input inside the output's volume was removed, not moved: only
     // what lies outside it counts.
     // (The plain one-sided distance bounds it: the skipping measure may

@@ -868,8 +868,9 @@ std::array<double, 2> one_sided_distances(const Soup& a, const Soup& b, double e
   return {ab, ba};
 }
 
-double one_sided_distance_skipping(const Soup& a, const Soup& b, double error_bound,
-                                   const std::function<bool(const Point3d&)>& skip) {
+namespace {
+/// From a to b only (points where `skip` holds, if given, do not count).
+double one_way(const Soup& a, const Soup& b, double error_bound, const std::function<bool(const Point3d&)>* skip) {
   std::vector<Corners> ta = triangles_of(a), tb = triangles_of(b);
   std::vector<Corners> sa = ta, sb = tb;
   tbb::parallel_sort(sa.begin(), sa.end());
@@ -877,7 +878,17 @@ double one_sided_distance_skipping(const Soup& a, const Soup& b, double error_bo
   std::vector<Corners> only_a;
   std::set_difference(sa.begin(), sa.end(), sb.begin(), sb.end(), std::back_inserter(only_a));
   if (tb.empty() && !only_a.empty()) return -1.0;
-  return only_a.empty() ? 0.0 : one_sided(only_a, SurfaceDistance(tb), error_bound, &skip);
+  return only_a.empty() ? 0.0 : one_sided(only_a, SurfaceDistance(tb), error_bound, skip);
+}
+}  // namespace
+
+double one_sided_distance(const Soup& a, const Soup& b, double error_bound) {
+  return one_way(a, b, error_bound, nullptr);
+}
+
+double one_sided_distance_skipping(const Soup& a, const Soup& b, double error_bound,
+                                   const std::function<bool(const Point3d&)>& skip) {
+  return one_way(a, b, error_bound, &skip);
 }
 
 double hausdorff_distance(const Soup& a, const Soup& b, double error_bound) {

@@ -96,6 +96,9 @@ double hausdorff_distance(const Soup& a, const Soup& b, double error_bound);
 /// to a} (how far a point of a can be from b, and the other way round).
 std::array<double, 2> one_sided_distances(const Soup& a, const Soup& b, double error_bound);
 
+/// The first of them alone: how far a point of a can be from b.
+double one_sided_distance(const Soup& a, const Soup& b, double error_bound);
+
 /// The distance from a to b over the points p of a where skip(p) is false
 /// (e.g. "inside b's volume": how far the part of a that b does not enclose
 /// is from b). `skip` must change only where a crosses b.
