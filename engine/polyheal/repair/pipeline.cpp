@@ -746,7 +746,7 @@ Assessment assess(const Soup& input, const Report& in, const Soup& written, doub
     // The input outside the output's volume is measured apart only when the
     // plain distance exceeds the bound (it bounds the refined one).
     const bool refine = a.input_to_output > max_deviation;
-    const Loss loss = measure_loss(input, written, max_deviation, refine);
+    const Loss loss = measure_loss(input, written, max_deviation, refine, a.certified);
     a.dropped_components = loss.lost_components + loss.absorbed_components;
     a.absorbed_components = loss.absorbed_components;
     a.absorbed_faces = loss.absorbed_faces;

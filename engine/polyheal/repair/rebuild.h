@@ -193,8 +193,9 @@ struct Loss {
   std::vector<char> absorbed;  // per input face
   double outside_distance = 0; // from the input outside the written volume to the written surface (error 5% of far)
 };
-/// `outside` asks for outside_distance too (the costly part; 0 otherwise).
-Loss measure_loss(const Soup& input, const Soup& written, double far, bool outside = false);
+/// `outside` asks for outside_distance too (the costly part; 0 otherwise). `certified`: the
+/// written surface is closed, oriented, manifold and intersects nothing (a faster inside test).
+Loss measure_loss(const Soup& input, const Soup& written, double far, bool outside = false, bool certified = false);
 
 void certify_rebuild(const Soup& input, const Soup& written, RebuildReport& report);
 
