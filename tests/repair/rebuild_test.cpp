@@ -17,6 +17,7 @@
 #include "polyheal/mesh/weld.h"
 #include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/rebuild.h"
+#include "polyheal/repair/regularize.h"
 #include "support/builders.h"
 
 using namespace polyheal;
@@ -723,5 +724,29 @@ TEST_CASE("rebuild: rounded crossings on one straight line make no slivers TetGe
     CHECK(rep.nearly_degenerate_faces.empty());
     CHECK(rep.vertices_near_edges.empty());
     CHECK(rep.tetgen_ready());
+  }
+}
+
+TEST_CASE("loss measure: on a certified surface the pseudo-normal inside test agrees with the winding number",
+          "[rebuild][loss]") {
+  // The union of overlapping spheres and of bones absorbs input faces and
+  // leaves input lying on the output (the kept pieces of cut faces). The
+  // shortcut (certified = true) must find the same faces inside and the same
+  // distance from the input outside the output, within the measure's error
+  // (5% of `far`), as the winding number everywhere.
+  for (const char* name : {"spheres_intersecting.off", "bones.off"}) {
+    const Soup in = read_soup(test::fixture(name));
+    const Soup out = regularize(in).soup;
+    REQUIRE(inspect(out).certified_clean());
+    const Report report = inspect(in);
+    const double far = 0.005 * bbox_diagonal(report);
+    const Loss slow = measure_loss(in, out, far, true, false);
+    const Loss fast = measure_loss(in, out, far, true, true);
+    INFO(name);
+    REQUIRE(slow.absorbed_faces > 0);
+    CHECK(fast.absorbed_faces == slow.absorbed_faces);
+    CHECK(fast.lost_faces == slow.lost_faces);
+    CHECK(fast.absorbed == slow.absorbed);
+    CHECK(std::abs(fast.outside_distance - slow.outside_distance) <= 0.05 * far);
   }
 }
