@@ -7,6 +7,7 @@
 #include <CGAL/AABB_tree.h>
 #include <CGAL/intersections.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <atomic>
@@ -14,6 +15,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <numeric>
 #include <optional>
 #include <unordered_map>
@@ -2853,11 +2855,10 @@ namespace {
 class InsideVolume {
  public:
   InsideVolume(const Facets& f, const detail::SurfaceDistance& surface, bool certified)
-      : f_(f), surface_(surface), winding_(f) {
-    if (certified && !f.tris.empty()) index();
-  }
+      : f_(f), surface_(surface), winding_(f), certified_(certified && !f.tris.empty()) {}
 
   bool operator()(const Point3d& p) const {
+    if (certified_) std::call_once(indexed_, [this] { index(); });  // on first use: often none is asked
     if (!unit_.empty()) {
       const std::size_t t = surface_.nearest(p).second;
       Point3d c;
@@ -2877,20 +2878,22 @@ class InsideVolume {
   /// Unit normals, the triangle across each edge, components and vertex
   /// pseudo-normals; left empty (no shortcut) unless every edge has two
   /// triangles using it in opposite directions.
-  void index() {
+  void index() const {
     const std::size_t n = f_.tris.size();
-    std::unordered_map<std::uint64_t, std::size_t> half;  // directed edge (a, b) -> triangle
-    half.reserve(3 * n);
     auto key = [](Index a, Index b) { return (std::uint64_t(a) << 32) | b; };
+    std::vector<std::pair<std::uint64_t, std::size_t>> half(3 * n);  // directed edge (a, b), its triangle
     for (std::size_t t = 0; t < n; ++t)
-      for (int k = 0; k < 3; ++k)
-        if (!half.emplace(key(f_.tris[t][k], f_.tris[t][(k + 1) % 3]), t).second) return;  // used twice one way
+      for (int k = 0; k < 3; ++k) half[3 * t + k] = {key(f_.tris[t][k], f_.tris[t][(k + 1) % 3]), t};
+    tbb::parallel_sort(half.begin(), half.end());
+    for (std::size_t i = 1; i < half.size(); ++i)
+      if (half[i].first == half[i - 1].first) return;  // used twice one way
     std::vector<std::array<std::size_t, 3>> across(n);
     UnionFind uf(n);
     for (std::size_t t = 0; t < n; ++t)
       for (int k = 0; k < 3; ++k) {
-        const auto it = half.find(key(f_.tris[t][(k + 1) % 3], f_.tris[t][k]));
-        if (it == half.end()) return;  // a border
+        const std::uint64_t back = key(f_.tris[t][(k + 1) % 3], f_.tris[t][k]);
+        const auto it = std::lower_bound(half.begin(), half.end(), std::make_pair(back, std::size_t(0)));
+        if (it == half.end() || it->first != back) return;  // a border
         across[t][k] = it->second;
         uf.unite(t, it->second);
       }
@@ -2968,10 +2971,13 @@ class InsideVolume {
   const Facets& f_;
   const detail::SurfaceDistance& surface_;
   const WindingNumber winding_;
-  std::vector<Point3d> unit_, vertex_;                // per triangle, per vertex (empty: no shortcut)
-  std::vector<std::array<std::size_t, 3>> across_;    // per triangle: the one across edge k (corner k to k + 1)
-  std::vector<std::size_t> component_, representative_;
-  std::unique_ptr<std::atomic<int>[]> front_;        // per component
+  const bool certified_;
+  // Made by index() on first use (then read only):
+  mutable std::once_flag indexed_;
+  mutable std::vector<Point3d> unit_, vertex_;              // per triangle, per vertex (empty: no shortcut)
+  mutable std::vector<std::array<std::size_t, 3>> across_;  // per triangle: the one across edge k (corner k to k + 1)
+  mutable std::vector<std::size_t> component_, representative_;
+  mutable std::unique_ptr<std::atomic<int>[]> front_;      // per component
 };
 
 }  // namespace
