@@ -10,7 +10,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <numeric>
 #include <map>
 #include <optional>
 #include <set>
@@ -357,7 +356,7 @@ class Deintersector {
     for (face_descriptor f : changed) before.push_back(normal(f));
     const auto unfolded = unfolded_edges(halfedges_of(changed));
     const auto folded = folded_faces(changed);
-    const CGAL::Bbox_3 was = box(changed);
+    const CGAL::Bbox_3 was = keep ? box(changed) : CGAL::Bbox_3();  // dirty if kept
     std::vector<Point> old;
     for (const auto& [v, p] : op.moves) {
       old.push_back(mesh_.point(v));
@@ -388,7 +387,7 @@ class Deintersector {
     const halfedge_descriptor start[2] = {mesh_.halfedge(changed[0]), mesh_.halfedge(changed[1])};
     // The quad's four outer edges keep their halfedges through the flip.
     const auto unfolded = unfolded_edges({mesh_.next(h), mesh_.prev(h), mesh_.next(o), mesh_.prev(o)});
-    const CGAL::Bbox_3 was = box(changed);
+    const CGAL::Bbox_3 was = keep ? box(changed) : CGAL::Bbox_3();  // dirty if kept
     const std::array<vertex_descriptor, 4> quad{op.a, op.b, c, d};
     std::array<halfedge_descriptor, 4> around;  // a flip may repoint a vertex's halfedge
     for (int k = 0; k < 4; ++k) around[k] = mesh_.halfedge(quad[k]);

@@ -2880,10 +2880,9 @@ class InsideVolume {
   /// triangles using it in opposite directions.
   void index() const {
     const std::size_t n = f_.tris.size();
-    auto key = [](Index a, Index b) { return (std::uint64_t(a) << 32) | b; };
     std::vector<std::pair<std::uint64_t, std::size_t>> half(3 * n);  // directed edge (a, b), its triangle
     for (std::size_t t = 0; t < n; ++t)
-      for (int k = 0; k < 3; ++k) half[3 * t + k] = {key(f_.tris[t][k], f_.tris[t][(k + 1) % 3]), t};
+      for (int k = 0; k < 3; ++k) half[3 * t + k] = {edge_key(f_.tris[t][k], f_.tris[t][(k + 1) % 3]), t};
     tbb::parallel_sort(half.begin(), half.end());
     for (std::size_t i = 1; i < half.size(); ++i)
       if (half[i].first == half[i - 1].first) return;  // used twice one way
@@ -2891,7 +2890,7 @@ class InsideVolume {
     UnionFind uf(n);
     for (std::size_t t = 0; t < n; ++t)
       for (int k = 0; k < 3; ++k) {
-        const std::uint64_t back = key(f_.tris[t][(k + 1) % 3], f_.tris[t][k]);
+        const std::uint64_t back = edge_key(f_.tris[t][(k + 1) % 3], f_.tris[t][k]);
         const auto it = std::lower_bound(half.begin(), half.end(), std::make_pair(back, std::size_t(0)));
         if (it == half.end() || it->first != back) return;  // a border
         across[t][k] = it->second;
