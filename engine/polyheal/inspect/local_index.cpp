@@ -14,6 +14,12 @@ namespace {
 using Tri = detail::Tri<Kernel>;
 constexpr std::int32_t kNone = -1;
 
+bool contains(const CGAL::Bbox_3& outer, const CGAL::Bbox_3& b) {
+  for (int d = 0; d < 3; ++d)
+    if (b.min(d) < outer.min(d) || b.max(d) > outer.max(d)) return false;
+  return true;
+}
+
 /// Sum of a box's extents: the insertion cost (half the surface-area
 /// heuristic's perimeter analogue; cheap and scale-free).
 double margin(const CGAL::Bbox_3& b) { return (b.xmax() - b.xmin()) + (b.ymax() - b.ymin()) + (b.zmax() - b.zmin()); }
@@ -146,11 +152,23 @@ struct LocalIndex::Impl {
     refit(grand);
   }
 
-  void insert(face_descriptor f) {
+  /// Indexes f (again); false when its leaf only took the new box.
+  bool insert(face_descriptor f) {
     const std::uint32_t i = static_cast<std::uint32_t>(f);
     grow(i);
-    erase(i);
-    box[i] = bbox_of(f);
+    const CGAL::Bbox_3 b = bbox_of(f);
+    if (leaf_of[i] != kNone) {
+      // A face that moved within its parent's box keeps its leaf: the
+      // ancestors still hold it (local edits mostly move faces that little;
+      // removing and re-inserting was a descent from the root each time).
+      const std::int32_t leaf = leaf_of[i], parent = nodes[leaf].parent;
+      if (parent == kNone || contains(nodes[parent].box, b)) {
+        box[i] = nodes[leaf].box = b;
+        return false;
+      }
+      erase(i);
+    }
+    box[i] = b;
     ++count;
     const std::int32_t leaf = make_node();
     nodes[leaf].face = i;
@@ -158,7 +176,7 @@ struct LocalIndex::Impl {
     leaf_of[i] = leaf;
     if (root == kNone) {
       root = leaf;
-      return;
+      return true;
     }
     // Descend to the sibling whose box grows least by taking the new one.
     std::int32_t at = root;
@@ -176,6 +194,7 @@ struct LocalIndex::Impl {
     if (old_parent == kNone) root = parent;
     else (nodes[old_parent].left == at ? nodes[old_parent].left : nodes[old_parent].right) = parent;
     refit(parent);
+    return true;
   }
 
   /// A triangle ready for the pair test: exact, and on InputKernel too when
@@ -221,8 +240,8 @@ struct LocalIndex::Impl {
     return detail::faces_intersect<Kernel>(x.exact, y.exact);
   }
 
-  /// Indexed faces whose boxes meet b, sorted.
-  void candidates_of(const CGAL::Bbox_3& b, std::vector<std::uint32_t>& out) const {
+  /// Indexed faces whose boxes meet b (sorted unless told not to).
+  void candidates_of(const CGAL::Bbox_3& b, std::vector<std::uint32_t>& out, bool sorted = true) const {
     out.clear();
     if (root == kNone) return;
     boost::container::small_vector<std::int32_t, 64> stack{root};
@@ -237,7 +256,7 @@ struct LocalIndex::Impl {
         stack.push_back(n.right);
       }
     }
-    std::sort(out.begin(), out.end());
+    if (sorted) std::sort(out.begin(), out.end());
   }
 
   /// Calls found(f, g) for each intersecting pair; stops when it returns false.
@@ -278,8 +297,7 @@ LocalIndex::LocalIndex(const Mesh& mesh) : impl_(std::make_unique<Impl>(mesh)) {
 LocalIndex::~LocalIndex() = default;
 
 void LocalIndex::update(const std::vector<face_descriptor>& faces) {
-  for (face_descriptor f : faces) impl_->insert(f);
-  impl_->inserted += faces.size();
+  for (face_descriptor f : faces) impl_->inserted += impl_->insert(f);
   if (impl_->inserted > 2 * impl_->count + 1024) impl_->rebuild();
 }
 
@@ -320,12 +338,20 @@ bool LocalIndex::would_intersect(const std::vector<std::array<vertex_descriptor,
   for (std::size_t i = 0; i < tris.size(); ++i)
     for (std::size_t j = i + 1; j < tris.size(); ++j)
       if (CGAL::do_overlap(boxes[i], boxes[j]) && Impl::any_pair_intersects(tris[i], tris[j])) return true;
+  // One descent for the whole fan (its triangles' boxes overlap: one query
+  // each visited the same nodes again), and each face found prepared once.
+  CGAL::Bbox_3 all;
+  for (const CGAL::Bbox_3& b : boxes) all += b;
   std::vector<std::uint32_t> candidates;
-  for (std::size_t i = 0; i < tris.size(); ++i) {
-    impl_->candidates_of(boxes[i], candidates);
-    for (std::uint32_t g : candidates) {
-      if (std::binary_search(skip.begin(), skip.end(), g) || !CGAL::do_overlap(boxes[i], impl_->box[g])) continue;
-      if (Impl::any_pair_intersects(tris[i], impl_->triangles(face_descriptor(g)))) return true;
+  impl_->candidates_of(all, candidates, false);
+  for (std::uint32_t g : candidates) {
+    if (std::binary_search(skip.begin(), skip.end(), g)) continue;
+    const CGAL::Bbox_3& bg = impl_->box[g];
+    std::optional<Impl::Fan> fan;
+    for (std::size_t i = 0; i < tris.size(); ++i) {
+      if (!CGAL::do_overlap(boxes[i], bg)) continue;
+      if (!fan) fan = impl_->triangles(face_descriptor(g));
+      if (Impl::any_pair_intersects(tris[i], *fan)) return true;
     }
   }
   return false;
