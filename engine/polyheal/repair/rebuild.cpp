@@ -896,6 +896,9 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
     for (std::size_t t = 0; t < T; ++t)
       if (near[t]) ok[t] = 0;
   }
+  // No facet to keep (the tubes, most soups): the grid surface as it is,
+  // without indexing its half-million faces for the patches below.
+  if (std::find(ok.begin(), ok.end(), 1) == ok.end()) return kept;
   // The grid surface: vertex normals, halfedges, points, stars.
   std::vector<Point3d> vnormal(vertices.size(), Point3d{0, 0, 0});
   for (const Tri& t : tris) {
