@@ -1,8 +1,13 @@
 // Soup -> Surface_mesh: builds valid oriented 2-manifolds, explains the rest.
 #include <catch2/catch.hpp>
 
+#include <random>
+
+#include <CGAL/intersections.h>
+
 #include "polyheal/io/read.h"
 #include "polyheal/mesh/convert.h"
+#include "polyheal/repair/detail/plane_meet.h"
 #include "support/builders.h"
 
 using namespace polyheal;
@@ -137,4 +142,53 @@ TEST_CASE("convert: a new edge to a pinch copy duplicates its twin's edge in the
   const vertex_descriptor v = *plain.vertices().begin();
   for (vertex_descriptor w : CGAL::vertices_around_target(plain.halfedge(v), plain))
     CHECK_FALSE(copies_share_edge(plain, vertex_identity_map(plain), pinch_copies(plain), v, w));
+}
+
+TEST_CASE("rebuild: sharpening's meeting points are Epeck's constructions, correctly rounded", "[rebuild]") {
+  // Random facets (and nearly parallel ones, whose meeting points are far
+  // and need long numbers), against the Epeck plane intersection and line
+  // projection the sharpening used before, rounded by nearest_point3d.
+  std::mt19937_64 rng(43);
+  std::uniform_real_distribution<double> u(-10, 10), tiny(-1e-9, 1e-9);
+  auto random_triangle = [&] { return detail::Triangle3d{{{u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}, {u(rng), u(rng), u(rng)}}}; };
+  auto nearly = [&](const detail::Triangle3d& t) {  // t's corners moved by 1e-9 at most
+    detail::Triangle3d s = t;
+    for (Point3d& p : s)
+      for (double& x : p) x += tiny(rng);
+    return s;
+  };
+  auto plane = [](const detail::Triangle3d& t) {
+    auto P = [&](int k) { return Point(t[k][0], t[k][1], t[k][2]); };
+    return Kernel::Plane_3(P(0), P(1), P(2));
+  };
+  std::size_t points = 0, none = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const detail::Triangle3d a = random_triangle();
+    const detail::Triangle3d b = trial % 4 == 1 ? nearly(a) : random_triangle();
+    const detail::Triangle3d c = trial % 4 == 2 ? nearly(b) : random_triangle();
+    const Point3d p{u(rng), u(rng), u(rng)};
+    Point3d ours;
+    const detail::Meeting three = detail::planes_meet(a, b, c, ours);
+    const auto hit = CGAL::intersection(plane(a), plane(b), plane(c));
+    const Point* q = hit ? boost::get<Point>(&*hit) : nullptr;
+    REQUIRE(three == (q ? detail::Meeting::point : detail::Meeting::none));
+    if (q) CHECK(ours == nearest_point3d(*q));
+    const detail::Meeting two = detail::nearest_on_planes_line(a, b, p, ours);
+    const auto line = CGAL::intersection(plane(a), plane(b));
+    const Kernel::Line_3* l = line ? boost::get<Kernel::Line_3>(&*line) : nullptr;
+    REQUIRE(two == (l ? detail::Meeting::point : detail::Meeting::none));
+    if (l) CHECK(ours == nearest_point3d(l->projection(Point(p[0], p[1], p[2]))));
+    points += three == detail::Meeting::point;
+    none += three == detail::Meeting::none;
+  }
+  CHECK(points > 300);
+  // parallel planes meet in no point; a facet without a normal is told apart
+  const detail::Triangle3d flat{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}, lifted{{{0, 0, 1}, {1, 0, 1}, {0, 1, 1}}},
+      side{{{0, 0, 0}, {0, 1, 0}, {0, 0, 1}}}, segment{{{0, 0, 0}, {1, 1, 1}, {2, 2, 2}}};
+  Point3d out;
+  CHECK(detail::planes_meet(flat, lifted, side, out) == detail::Meeting::none);
+  CHECK(detail::nearest_on_planes_line(flat, lifted, {0, 0, 0}, out) == detail::Meeting::none);
+  CHECK(detail::nearest_on_planes_line(flat, side, {0.5, 3, 7}, out) == detail::Meeting::point);
+  CHECK(out == Point3d{0, 3, 0});
+  CHECK(detail::planes_meet(flat, side, segment, out) == detail::Meeting::degenerate);
 }

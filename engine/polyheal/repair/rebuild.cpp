@@ -5,6 +5,7 @@
 #include <CGAL/AABB_segment_primitive.h>
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
+#include <CGAL/Mpzf.h>
 #include <CGAL/intersections.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -35,6 +36,7 @@
 #include "polyheal/repair/clean_soup.h"
 #include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/detail/kuhn_mesh.h"
+#include "polyheal/repair/detail/plane_meet.h"
 #include "polyheal/repair/detail/shape_decimation.h"
 
 namespace polyheal {
@@ -1780,6 +1782,63 @@ class TriangleGrid {
   std::unordered_map<Key, std::vector<std::size_t>, KeyHash> cells_;
 };
 
+}  // namespace
+
+namespace detail {
+namespace {
+
+using Z = CGAL::Mpzf;
+struct Z3 {
+  Z x, y, z;
+};
+Z3 sub(const Z3& u, const Z3& w) { return {u.x - w.x, u.y - w.y, u.z - w.z}; }
+Z3 cross(const Z3& u, const Z3& w) { return {u.y * w.z - u.z * w.y, u.z * w.x - u.x * w.z, u.x * w.y - u.y * w.x}; }
+Z dot(const Z3& u, const Z3& w) { return u.x * w.x + u.y * w.y + u.z * w.z; }
+Z3 exact(const Point3d& q) { return {Z(q[0]), Z(q[1]), Z(q[2])}; }
+/// The plane n . x = d through t's corners; false when n = 0.
+bool plane(const Triangle3d& t, Z3& n, Z& d) {
+  const Z3 o = exact(t[0]);
+  n = cross(sub(exact(t[1]), o), sub(exact(t[2]), o));
+  d = dot(n, o);
+  return !(n.x.is_zero() && n.y.is_zero() && n.z.is_zero());
+}
+double rounded(const Z& num, const Z& den) { return nearest_double(Kernel::FT(mpq_class(num) / mpq_class(den))); }
+
+}  // namespace
+
+Meeting planes_meet(const Triangle3d& a, const Triangle3d& b, const Triangle3d& c, Point3d& out) {
+  Z3 na, nb, nc;
+  Z da, db, dc;
+  if (!plane(a, na, da) || !plane(b, nb, db) || !plane(c, nc, dc)) return Meeting::degenerate;
+  // Cramer: x = (da (nb x nc) + db (nc x na) + dc (na x nb)) / na . (nb x nc)
+  const Z3 bc = cross(nb, nc), ca = cross(nc, na), ab = cross(na, nb);
+  const Z det = dot(na, bc);
+  if (det.is_zero()) return Meeting::none;
+  out = {rounded(da * bc.x + db * ca.x + dc * ab.x, det), rounded(da * bc.y + db * ca.y + dc * ab.y, det),
+         rounded(da * bc.z + db * ca.z + dc * ab.z, det)};
+  return Meeting::point;
+}
+
+Meeting nearest_on_planes_line(const Triangle3d& a, const Triangle3d& b, const Point3d& p, Point3d& out) {
+  Z3 na, nb;
+  Z da, db;
+  if (!plane(a, na, da) || !plane(b, nb, db)) return Meeting::degenerate;
+  // x = p - alpha na - beta nb with na . x = da, nb . x = db (times g below)
+  const Z aa = dot(na, na), ab = dot(na, nb), bb = dot(nb, nb);
+  const Z g = aa * bb - ab * ab;  // |na x nb|^2
+  if (g.is_zero()) return Meeting::none;
+  const Z3 q = exact(p);
+  const Z ra = dot(na, q) - da, rb = dot(nb, q) - db;
+  const Z alpha = ra * bb - ab * rb, beta = aa * rb - ab * ra;
+  out = {rounded(q.x * g - alpha * na.x - beta * nb.x, g), rounded(q.y * g - alpha * na.y - beta * nb.y, g),
+         rounded(q.z * g - alpha * na.z - beta * nb.z, g)};
+  return Meeting::point;
+}
+
+}  // namespace detail
+
+namespace {
+
 class BoundedDecimation {
  public:
   /// `reference`: the extracted surface the result must stay near; `cell`:
@@ -1843,19 +1902,30 @@ class BoundedDecimation {
                            na[2] * (nb[0] * nc[1] - nb[1] * nc[0]);
         if (std::abs(det) > 0.3) c = p;
       }
-      Point target;
-      if (c >= 0) {
-        const auto hit = CGAL::intersection(plane(a), plane(b), plane(c));
-        const Point* p = hit ? boost::get<Point>(&*hit) : nullptr;
-        if (!p) continue;
-        target = *p;
-      } else {
-        const auto hit = CGAL::intersection(plane(a), plane(b));
-        const Kernel::Line_3* l = hit ? boost::get<Kernel::Line_3>(&*hit) : nullptr;
-        if (!l) continue;
-        target = l->projection(mesh_.point(v));
+      auto triangle = [&](std::int64_t t) {
+        const Tri& tr = f.tris[std::size_t(t)];
+        return detail::Triangle3d{f.points[tr[0]], f.points[tr[1]], f.points[tr[2]]};
+      };
+      Point3d meeting;
+      const detail::Meeting m = c >= 0 ? detail::planes_meet(triangle(a), triangle(b), triangle(c), meeting)
+                                       : detail::nearest_on_planes_line(triangle(a), triangle(b), at(v), meeting);
+      if (m == detail::Meeting::none) continue;
+      if (m == detail::Meeting::degenerate) {  // a facet without a normal: as Epeck makes of it
+        Point target;
+        if (c >= 0) {
+          const auto hit = CGAL::intersection(plane(a), plane(b), plane(c));
+          const Point* p = hit ? boost::get<Point>(&*hit) : nullptr;
+          if (!p) continue;
+          target = *p;
+        } else {
+          const auto hit = CGAL::intersection(plane(a), plane(b));
+          const Kernel::Line_3* l = hit ? boost::get<Kernel::Line_3>(&*hit) : nullptr;
+          if (!l) continue;
+          target = l->projection(mesh_.point(v));
+        }
+        meeting = nearest_point3d(target);
       }
-      const Point3d x = nearest_point3d(target);
+      const Point3d x = meeting;
       const Point3d old = at(v);
       const Point3d d{x[0] - old[0], x[1] - old[1], x[2] - old[2]};
       if (dot(d, d) > reach * reach || dot(d, d) == 0) continue;
