@@ -1858,7 +1858,7 @@ class BoundedDecimation {
   /// neighbourhood lies on facets of two planes meeting at more than the
   /// feature angle moves onto their intersection line (its nearest point),
   /// or, with a third independent plane, onto their common point — exact
-  /// constructions (Epeck), rounded once — when that is within `reach`, its
+  /// constructions (detail/plane_meet.h), rounded once — when that is within `reach`, its
   /// faces stay non-degenerate (exactly, and within TetGen's tolerance:
   /// sharpening_nears_tolerance), turn less than 75 degrees, fold onto no
   /// neighbour (normals more than 179 degrees apart) and intersect nothing
