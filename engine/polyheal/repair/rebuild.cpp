@@ -6,6 +6,7 @@
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/Mpzf.h>
+#include <CGAL/Simple_cartesian.h>
 #include <CGAL/intersections.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -1788,19 +1789,15 @@ namespace detail {
 namespace {
 
 using Z = CGAL::Mpzf;
-struct Z3 {
-  Z x, y, z;
-};
-Z3 sub(const Z3& u, const Z3& w) { return {u.x - w.x, u.y - w.y, u.z - w.z}; }
-Z3 cross(const Z3& u, const Z3& w) { return {u.y * w.z - u.z * w.y, u.z * w.x - u.x * w.z, u.x * w.y - u.y * w.x}; }
-Z dot(const Z3& u, const Z3& w) { return u.x * w.x + u.y * w.y + u.z * w.z; }
+using ZK = CGAL::Simple_cartesian<Z>;  // exact ring operations on doubles' values
+using Z3 = ZK::Vector_3;
 Z3 exact(const Point3d& q) { return {Z(q[0]), Z(q[1]), Z(q[2])}; }
 /// The plane n . x = d through t's corners; false when n = 0.
 bool plane(const Triangle3d& t, Z3& n, Z& d) {
   const Z3 o = exact(t[0]);
-  n = cross(sub(exact(t[1]), o), sub(exact(t[2]), o));
-  d = dot(n, o);
-  return !(n.x.is_zero() && n.y.is_zero() && n.z.is_zero());
+  n = CGAL::cross_product(exact(t[1]) - o, exact(t[2]) - o);
+  d = n * o;
+  return n != CGAL::NULL_VECTOR;
 }
 double rounded(const Z& num, const Z& den) { return nearest_double(Kernel::FT(mpq_class(num) / mpq_class(den))); }
 
@@ -1811,11 +1808,11 @@ Meeting planes_meet(const Triangle3d& a, const Triangle3d& b, const Triangle3d& 
   Z da, db, dc;
   if (!plane(a, na, da) || !plane(b, nb, db) || !plane(c, nc, dc)) return Meeting::degenerate;
   // Cramer: x = (da (nb x nc) + db (nc x na) + dc (na x nb)) / na . (nb x nc)
-  const Z3 bc = cross(nb, nc), ca = cross(nc, na), ab = cross(na, nb);
-  const Z det = dot(na, bc);
+  const Z3 bc = CGAL::cross_product(nb, nc), ca = CGAL::cross_product(nc, na), ab = CGAL::cross_product(na, nb);
+  const Z det = na * bc;
   if (det.is_zero()) return Meeting::none;
-  out = {rounded(da * bc.x + db * ca.x + dc * ab.x, det), rounded(da * bc.y + db * ca.y + dc * ab.y, det),
-         rounded(da * bc.z + db * ca.z + dc * ab.z, det)};
+  const Z3 num = da * bc + db * ca + dc * ab;
+  out = {rounded(num.x(), det), rounded(num.y(), det), rounded(num.z(), det)};
   return Meeting::point;
 }
 
@@ -1824,14 +1821,14 @@ Meeting nearest_on_planes_line(const Triangle3d& a, const Triangle3d& b, const P
   Z da, db;
   if (!plane(a, na, da) || !plane(b, nb, db)) return Meeting::degenerate;
   // x = p - alpha na - beta nb with na . x = da, nb . x = db (times g below)
-  const Z aa = dot(na, na), ab = dot(na, nb), bb = dot(nb, nb);
+  const Z aa = na * na, ab = na * nb, bb = nb * nb;
   const Z g = aa * bb - ab * ab;  // |na x nb|^2
   if (g.is_zero()) return Meeting::none;
   const Z3 q = exact(p);
-  const Z ra = dot(na, q) - da, rb = dot(nb, q) - db;
+  const Z ra = na * q - da, rb = nb * q - db;
   const Z alpha = ra * bb - ab * rb, beta = aa * rb - ab * ra;
-  out = {rounded(q.x * g - alpha * na.x - beta * nb.x, g), rounded(q.y * g - alpha * na.y - beta * nb.y, g),
-         rounded(q.z * g - alpha * na.z - beta * nb.z, g)};
+  const Z3 num = g * q - alpha * na - beta * nb;
+  out = {rounded(num.x(), g), rounded(num.y(), g), rounded(num.z(), g)};
   return Meeting::point;
 }
 
@@ -1870,11 +1867,6 @@ class BoundedDecimation {
     const double on_input = 0.05 * reach;
     const double cos_same = std::cos(10 * M_PI / 180);
     const std::vector<Point3d> unit = unit_normals(f);
-    auto plane = [&](std::int64_t t) {
-      const Tri& tr = f.tris[std::size_t(t)];
-      auto P = [&](int k) { const Point3d& p = f.points[tr[k]]; return Point(p[0], p[1], p[2]); };
-      return Kernel::Plane_3(P(0), P(1), P(2));
-    };
     std::size_t moved = 0;
     std::vector<vertex_descriptor> all(mesh_.vertices().begin(), mesh_.vertices().end());
     for (vertex_descriptor v : all) {
@@ -1906,26 +1898,11 @@ class BoundedDecimation {
         const Tri& tr = f.tris[std::size_t(t)];
         return detail::Triangle3d{f.points[tr[0]], f.points[tr[1]], f.points[tr[2]]};
       };
-      Point3d meeting;
-      const detail::Meeting m = c >= 0 ? detail::planes_meet(triangle(a), triangle(b), triangle(c), meeting)
-                                       : detail::nearest_on_planes_line(triangle(a), triangle(b), at(v), meeting);
-      if (m == detail::Meeting::none) continue;
-      if (m == detail::Meeting::degenerate) {  // a facet without a normal: as Epeck makes of it
-        Point target;
-        if (c >= 0) {
-          const auto hit = CGAL::intersection(plane(a), plane(b), plane(c));
-          const Point* p = hit ? boost::get<Point>(&*hit) : nullptr;
-          if (!p) continue;
-          target = *p;
-        } else {
-          const auto hit = CGAL::intersection(plane(a), plane(b));
-          const Kernel::Line_3* l = hit ? boost::get<Kernel::Line_3>(&*hit) : nullptr;
-          if (!l) continue;
-          target = l->projection(mesh_.point(v));
-        }
-        meeting = nearest_point3d(target);
-      }
-      const Point3d x = meeting;
+      Point3d x;
+      const detail::Meeting m = c >= 0 ? detail::planes_meet(triangle(a), triangle(b), triangle(c), x)
+                                       : detail::nearest_on_planes_line(triangle(a), triangle(b), at(v), x);
+      // (every facet has a normal: prepare() drops the exactly collinear ones)
+      if (m != detail::Meeting::point) continue;
       const Point3d old = at(v);
       const Point3d d{x[0] - old[0], x[1] - old[1], x[2] - old[2]};
       if (dot(d, d) > reach * reach || dot(d, d) == 0) continue;
