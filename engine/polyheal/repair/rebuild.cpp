@@ -5,7 +5,6 @@
 #include <CGAL/AABB_segment_primitive.h>
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
-#include <CGAL/Mpzf.h>
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/intersections.h>
 #include <tbb/parallel_for.h>
@@ -37,6 +36,7 @@
 #include "polyheal/repair/clean_soup.h"
 #include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/detail/kuhn_mesh.h"
+#include "polyheal/repair/detail/exact_meet.h"
 #include "polyheal/repair/detail/plane_meet.h"
 #include "polyheal/repair/detail/shape_decimation.h"
 
@@ -1788,43 +1788,26 @@ class TriangleGrid {
 namespace detail {
 namespace {
 
-using Z = CGAL::Mpzf;
-using ZK = CGAL::Simple_cartesian<Z>;  // exact ring operations on doubles' values
-using Z3 = ZK::Vector_3;
-Z3 exact(const Point3d& q) { return {Z(q[0]), Z(q[1]), Z(q[2])}; }
-/// The plane n . x = d through t's corners; false when n = 0.
-bool plane(const Triangle3d& t, Z3& n, Z& d) {
-  const Z3 o = exact(t[0]);
-  n = CGAL::cross_product(exact(t[1]) - o, exact(t[2]) - o);
-  d = n * o;
-  return n != CGAL::NULL_VECTOR;
-}
 double rounded(const Z& num, const Z& den) { return nearest_double(Kernel::FT(mpq_class(num) / mpq_class(den))); }
 
 }  // namespace
 
 Meeting planes_meet(const Triangle3d& a, const Triangle3d& b, const Triangle3d& c, Point3d& out) {
-  Z3 na, nb, nc;
-  Z da, db, dc;
-  if (!plane(a, na, da) || !plane(b, nb, db) || !plane(c, nc, dc)) return Meeting::degenerate;
-  // Cramer: x = (da (nb x nc) + db (nc x na) + dc (na x nb)) / na . (nb x nc)
-  const Z3 bc = CGAL::cross_product(nb, nc), ca = CGAL::cross_product(nc, na), ab = CGAL::cross_product(na, nb);
-  const Z det = na * bc;
-  if (det.is_zero()) return Meeting::none;
-  const Z3 num = da * bc + db * ca + dc * ab;
-  out = {rounded(num.x(), det), rounded(num.y(), det), rounded(num.z(), det)};
-  return Meeting::point;
+  Homogeneous h;
+  const Meeting m = planes_meet_exactly(a, b, c, h);
+  if (m == Meeting::point) out = {rounded(h.num.x(), h.den), rounded(h.num.y(), h.den), rounded(h.num.z(), h.den)};
+  return m;
 }
 
 Meeting nearest_on_planes_line(const Triangle3d& a, const Triangle3d& b, const Point3d& p, Point3d& out) {
   Z3 na, nb;
   Z da, db;
-  if (!plane(a, na, da) || !plane(b, nb, db)) return Meeting::degenerate;
+  if (!exact_plane(a, na, da) || !exact_plane(b, nb, db)) return Meeting::degenerate;
   // x = p - alpha na - beta nb with na . x = da, nb . x = db (times g below)
   const Z aa = na * na, ab = na * nb, bb = nb * nb;
   const Z g = aa * bb - ab * ab;  // |na x nb|^2
   if (g.is_zero()) return Meeting::none;
-  const Z3 q = exact(p);
+  const Z3 q = exact_vector(p);
   const Z ra = na * q - da, rb = nb * q - db;
   const Z alpha = ra * bb - ab * rb, beta = aa * rb - ab * ra;
   const Z3 num = g * q - alpha * na - beta * nb;
