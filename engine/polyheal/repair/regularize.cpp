@@ -42,6 +42,8 @@ using IK = InputKernel;  // the input's doubles: exact filtered predicates
 /// Pieces or faces around one edge: two, or a few at an intersection curve
 /// (inline storage: the growth asks this for every edge it crosses).
 using Ids = boost::container::small_vector<Index, 6>;
+/// Where two triangles meet, as vertex ids: one point or a segment's ends.
+using Ends = boost::container::small_vector<Index, 2>;
 
 // §3.5: the constrained Delaunay triangulation of one triangle, in its plane
 // projected along the dominant normal axis (dropping a coordinate is exact).
@@ -243,9 +245,9 @@ class Regularizer {
   }
 
   /// The triangles split together with f: its cluster (f alone, usually).
-  std::vector<Index> cluster_of(Index f) {
+  Ids cluster_of(Index f) {
     const auto it = members_.find(root(f));
-    return it == members_.end() ? std::vector<Index>{f} : it->second;
+    return it == members_.end() ? Ids{f} : Ids(it->second.begin(), it->second.end());
   }
 
   // ---- seeds (§3.3, generalised) -----------------------------------------
@@ -548,7 +550,7 @@ class Regularizer {
   /// net count (zero: no surface there).
   void split(Index t) {
     if (split_[t] || partners_[t].empty()) return;
-    const std::vector<Index> cluster = cluster_of(t);
+    const Ids cluster = cluster_of(t);
     for (Index m : cluster) split_[m] = 1;
     r_.triangles_split += cluster.size();
     // Corners of the cluster and of what it meets first, so that an
@@ -599,7 +601,7 @@ class Regularizer {
       for (Index m : cluster)
         for (Index u : partners_[m]) {
           if (root(u) == root(m)) continue;  // the cluster's own edges are constraints already
-          const std::vector<Index>& seg = segment(m, u);
+          const Ends& seg = segment(m, u);
           if (seg.size() == 1) insert(seg[0]);
           if (seg.size() == 2) cdt.insert_constraint(insert(seg[0]), insert(seg[1]));
         }
@@ -672,7 +674,7 @@ class Regularizer {
     };
     std::vector<Seg> segs;
     for (Index u : partners_[t]) {
-      const std::vector<Index>& seg = segment(t, u);
+      const Ends& seg = segment(t, u);
       if (seg.size() == 1) insert(seg[0]);
       if (seg.size() != 2 || seg[0] == seg[1]) continue;
       Seg x{seg[0], seg[1], u, proj(points_[seg[0]], i, j), proj(points_[seg[1]], i, j), {}, {}};
@@ -743,7 +745,7 @@ class Regularizer {
 
   /// The intersection of input triangles t and u as global vertex ids (one
   /// point or a segment's two ends), constructed once per pair (§3.2).
-  const std::vector<Index>& segment(Index t, Index u) {
+  const Ends& segment(Index t, Index u) {
     const auto [it, inserted] = segments_.try_emplace(undirected_edge_key(t, u));
     if (!inserted) return it->second;
     ++r_.segments;
@@ -753,7 +755,7 @@ class Regularizer {
       return K::Triangle_3(points_[fv[0]], points_[fv[1]], points_[fv[2]]);
     };
     const auto result = CGAL::intersection(tri(t), tri(u));
-    std::vector<Index>& ids = it->second;
+    Ends& ids = it->second;
     if (!result) return ids;
     if (const EPoint* p = boost::get<EPoint>(&*result)) {
       ids.push_back(vertex_id(*p));
@@ -773,7 +775,7 @@ class Regularizer {
   /// one crosses the other, and is named by that pair, so the neighbour
   /// sharing the edge gets the same point without comparing exact numbers.
   /// False (ids untouched) when not in general position.
-  bool generic_segment(Index t, Index u, std::vector<Index>& ids) {
+  bool generic_segment(Index t, Index u, Ends& ids) {
     const FaceView tv = soup_.face(t), uv = soup_.face(u);
     auto ip = [&](Index v) { return IK::Point_3(soup_.points[v][0], soup_.points[v][1], soup_.points[v][2]); };
     const std::array<IK::Point_3, 3> a{ip(tv[0]), ip(tv[1]), ip(tv[2])}, b{ip(uv[0]), ip(uv[1]), ip(uv[2])};
@@ -787,7 +789,7 @@ class Regularizer {
       ob[k] = CGAL::orientation(a[0], a[1], a[2], b[k]);
       if (oa[k] == CGAL::COPLANAR || ob[k] == CGAL::COPLANAR) return false;
     }
-    std::vector<Index> found;
+    Ends found;
     // edges of x (corners sides ox against y's plane) crossing triangle y
     auto crossings = [&](const FaceView& xv, const std::array<IK::Point_3, 3>& x, const std::array<CGAL::Orientation, 3>& ox,
                          const std::array<IK::Point_3, 3>& y, Index y_face) {
@@ -814,11 +816,11 @@ class Regularizer {
   /// face and the strip beside it): their segment runs from s to where the
   /// edge opposite s in one of them crosses the other.
   bool generic_shared_vertex(Index t, const FaceView& tv, const std::array<IK::Point_3, 3>& a, Index u,
-                             const FaceView& uv, const std::array<IK::Point_3, 3>& b, std::vector<Index>& ids) {
+                             const FaceView& uv, const std::array<IK::Point_3, 3>& b, Ends& ids) {
     Index s = 0;
     for (Index x : tv)
       if (x == uv[0] || x == uv[1] || x == uv[2]) s = x;
-    std::vector<Index> found;
+    Ends found;
     // the edge of x opposite s against triangle y (y_face: its input face)
     auto opposite = [&](const FaceView& xv, const std::array<IK::Point_3, 3>& x, const std::array<IK::Point_3, 3>& y,
                         Index y_face) {
@@ -915,9 +917,9 @@ class Regularizer {
   std::vector<char> split_, closed_, registered_;
   std::vector<std::vector<Index>> subs_;  // per input face: its sub-triangles
   std::vector<Piece> pieces_;             // input faces (ids 0..F-1), then sub-triangles
-  std::unordered_map<std::uint64_t, std::vector<Index>> edges_;       // sub-triangles by edge
+  std::unordered_map<std::uint64_t, Ids> edges_;                      // sub-triangles by edge
   std::vector<std::pair<std::uint64_t, Index>> face_edges_;           // (edge, input face), sorted
-  std::unordered_map<std::uint64_t, std::vector<Index>> segments_;    // by face pair
+  std::unordered_map<std::uint64_t, Ends> segments_;                  // by face pair
   struct PairHash {
     std::size_t operator()(const std::pair<std::uint64_t, Index>& k) const {
       return std::hash<std::uint64_t>()(k.first * 0x9E3779B97F4A7C15ull ^ k.second);
