@@ -1303,11 +1303,18 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
     DeintersectOptions d;
     d.certify = false;
     d.known_pairs = &rounded;  // every pair: faces without a rounded corner are the exact result's
+    // After the moves a pair can meet only where a face changed, or where a
+    // pair found above was left as it was: only those faces are checked again.
+    std::vector<char> recheck(result.soup.face_count(), 0);
+    for (const FacePair& p : rounded) recheck[p.first] = recheck[p.second] = 1;
     try {
       DeintersectResult fixed = remove_self_intersections(result.soup, d);
       // its faces are the input's, in order, when it kept them all (the
       // provenance depends on it); otherwise the passes below take over
       if (fixed.soup.face_count() == result.soup.face_count()) {
+        for (std::size_t f = 0; f < fixed.soup.face_count(); ++f)
+          for (int k = 0; k < 3; ++k)
+            if (fixed.soup.points[fixed.soup.face(f)[k]] != result.soup.points[result.soup.face(f)[k]]) recheck[f] = 1;
         r.rounding_moves = fixed.report.moved_vertices;
         result.soup = std::move(fixed.soup);
       }
@@ -1317,7 +1324,11 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
     // What is still intersecting is regularized again, exactly, on the
     // rounded coordinates: each pass leaves fewer and smaller crossings to
     // round (iterated snap rounding).
-    for (int pass = 1; pass < o.max_passes && !find_self_intersections(result.soup).empty(); ++pass) {
+    SelfIntersectionOptions changed;
+    changed.only = &recheck;
+    for (int pass = 1; pass < o.max_passes &&
+                       !find_self_intersections(result.soup, pass == 1 ? changed : SelfIntersectionOptions{}).empty();
+         ++pass) {
       RegularizeOptions again;
       again.certify = false;
       again.max_passes = 1;
