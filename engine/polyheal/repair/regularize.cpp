@@ -6,6 +6,7 @@
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <CGAL/intersections.h>
 #include <tbb/parallel_invoke.h>
@@ -52,7 +53,7 @@ struct VertexInfo {
   std::int64_t id = -1;  // global vertex id; -1: a crossing the triangulation constructed
 };
 using Vb = CGAL::Triangulation_vertex_base_with_info_2<VertexInfo, K>;
-using Fb = CGAL::Constrained_triangulation_face_base_2<K>;
+using Fb = CGAL::Triangulation_face_base_with_info_2<Index, K, CGAL::Constrained_triangulation_face_base_2<K>>;
 using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
 using CDT = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::Exact_intersections_tag>;
 
@@ -83,6 +84,8 @@ enum State : char { kUnvisited = 0, kValid = 1, kInvalid = 2 };
 
 /// A triangle of the arrangement being classified: an input triangle, or one
 /// of the sub-triangles a partially valid triangle is split into (§3.5).
+constexpr Index kNoPiece = ~Index(0);
+
 struct Piece {
   std::array<Index, 3> v;  // global vertex ids, oriented like the sheets it stands for
   Index source;            // an input face it lies in (and is oriented like)
@@ -90,6 +93,12 @@ struct Piece {
   bool alive = true;       // false once the input triangle is split
   State state = kUnvisited;
   int front = 0;           // winding number on its outer side, once classified
+  /// Across edge (v[e], v[e + 1]): the other piece, when the edge is inside
+  /// one sub-triangulation and unconstrained (no other piece can have it:
+  /// an edge another triangle shares lies on their intersection segment, a
+  /// constraint, or on the triangle's own side); kNoPiece otherwise, and
+  /// the edge is looked up among all pieces.
+  std::array<Index, 3> across{kNoPiece, kNoPiece, kNoPiece};
 };
 
 /// The coordinate axes (i, j) that remain when axis k is dropped, in cyclic
@@ -392,7 +401,7 @@ class Regularizer {
       for (int e = 0; e < 3; ++e) {
         const Index a = piece.v[e], b = piece.v[(e + 1) % 3];
         next.clear();
-        const Ids around = pieces_around(a, b, true);
+        const Ids around = piece.across[e] != kNoPiece ? Ids{p, piece.across[e]} : pieces_around(a, b, true);
         if (around.size() == 2) {
           const Index other = around[0] == p ? around[1] : around[0];
           if (traverses(other, b, a) && pieces_[other].weight == piece.weight) next.push_back({other, piece.front});
@@ -620,6 +629,7 @@ class Regularizer {
     for (Index m : cluster) kill(m);
     std::vector<Index> made;
     for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+      f->info() = kNoPiece;
       // net count of the members covering this face (counter-clockwise: +1)
       int count = sign[0];
       Index source = cluster.front();
@@ -650,7 +660,24 @@ class Regularizer {
       piece.weight = std::abs(count);
       pieces_.push_back(piece);
       made.push_back(q);
-      for (int e = 0; e < 3; ++e) edges_[undirected_edge_key(v[e], v[(e + 1) % 3])].push_back(q);
+      f->info() = q;
+    }
+    // Each piece's edges: the other piece across an unconstrained edge inside
+    // the triangulation, or, for the rest, an entry in the edge lookup.
+    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+      const Index q = f->info();
+      if (q == kNoPiece) continue;
+      Piece& piece = pieces_[q];
+      for (int e = 0; e < 3; ++e) {
+        const Index a = piece.v[e], b = piece.v[(e + 1) % 3];
+        int opposite = 0;  // f's vertex opposite edge ab
+        while (Index(f->vertex(opposite)->info().id) == a || Index(f->vertex(opposite)->info().id) == b) ++opposite;
+        const CDT::Face_handle g = f->neighbor(opposite);
+        if (!f->is_constrained(opposite) && !cdt.is_infinite(g) && g->info() != kNoPiece)
+          piece.across[e] = g->info();
+        else
+          edges_[undirected_edge_key(a, b)].push_back(q);
+      }
     }
     for (Index m : cluster) subs_[m] = made;
     r_.sub_triangles += made.size();
