@@ -9,6 +9,8 @@
 #include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <CGAL/intersections.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_sort.h>
 #include <boost/container/small_vector.hpp>
@@ -158,6 +160,7 @@ class Regularizer {
   /// or (reported) unclassified.
   void run(Observer* observer) {
     const std::size_t faces = soup_.face_count();
+    presplit();
     // Seeds among the intersection-free triangles first (no sub-triangulation
     // needed to classify them), then among the sub-triangles of what is left.
     for (std::size_t f = 0; f < faces; ++f) {
@@ -552,6 +555,64 @@ class Regularizer {
     }
   }
 
+  // §3.5 in three steps. plan() gathers what a triangle's sub-triangulation
+  // needs and hands out the ids of new points (segments, their crossings):
+  // sequential. triangulate() builds it reading shared state only: run for
+  // every intersecting triangle at once, in parallel, before the growth
+  // (the growth reaches all of them anyway). commit() turns the result into
+  // pieces when the growth reaches the triangle, so pieces are numbered in
+  // the growth's order as before.
+
+  /// A segment of a triangle alone in its plane (its intersection with
+  /// partner u), projected, with the crossings on it in order from a to b.
+  struct Seg {
+    Index a, b, u;
+    K::Point_2 pa, pb;
+    CGAL::Bbox_2 box;
+    std::vector<Index> on;  // crossings, by id
+  };
+  struct Plan {
+    Ids cluster;
+    EVector n;              // the cluster's normal
+    int k = 0, i = 0, j = 0;  // projection along axis k onto (i, j)
+    std::vector<Index> lone;  // a triangle alone: single-point intersections, in partner order
+    std::vector<Seg> segs;    // a triangle alone: its segments
+    std::vector<Ends> meets;  // a cluster: its members' intersections with other planes
+  };
+  /// A sub-triangulation's faces that are pieces. A vertex is a global id,
+  /// or -1 - k for lifted[k] (a crossing the triangulation constructed);
+  /// across[e]: the face across edge (v[e], v[e + 1]) inside the
+  /// triangulation when that edge is unconstrained (see Piece::across), -1
+  /// otherwise.
+  struct SubFace {
+    std::array<std::int64_t, 3> v;
+    Index source;
+    int weight;
+    std::array<std::int32_t, 3> across;
+  };
+  struct Triangulated {
+    std::vector<EPoint> lifted;
+    std::vector<SubFace> faces;
+  };
+
+  /// Every intersecting triangle's sub-triangulation, planned in index order
+  /// and built in parallel.
+  void presplit() {
+    std::vector<Index> roots;
+    for (std::size_t f = 0; f < soup_.face_count(); ++f)
+      if (!partners_[f].empty() && root(Index(f)) == f) roots.push_back(Index(f));
+    slot_.assign(soup_.face_count(), kNoPiece);
+    plans_.reserve(roots.size());
+    for (Index t : roots) {
+      slot_[t] = Index(plans_.size());
+      plans_.push_back(plan(t));
+    }
+    triangulated_.resize(roots.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, roots.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t s = r.begin(); s != r.end(); ++s) triangulated_[s] = triangulate(plans_[s], roots[s]);
+    });
+  }
+
   /// Replaces input triangle t (which intersects others) by its
   /// sub-triangles: §3.5 steps 1-3. The triangles t overlaps in its own plane
   /// (its cluster) are split with it in one triangulation: a face of it
@@ -559,9 +620,15 @@ class Regularizer {
   /// net count (zero: no surface there).
   void split(Index t) {
     if (split_[t] || partners_[t].empty()) return;
-    const Ids cluster = cluster_of(t);
-    for (Index m : cluster) split_[m] = 1;
-    r_.triangles_split += cluster.size();
+    const Index s = slot_[root(t)];
+    commit(plans_[s], triangulated_[s]);
+    triangulated_[s] = Triangulated();
+  }
+
+  Plan plan(Index t) {
+    Plan plan;
+    plan.cluster = cluster_of(t);
+    const Ids& cluster = plan.cluster;
     // Corners of the cluster and of what it meets first, so that an
     // intersection point that is an input vertex gets that vertex's id.
     for (Index m : cluster) {
@@ -570,117 +637,25 @@ class Regularizer {
         for (Index v : soup_.face(u)) register_vertex(v);
     }
     const FaceView fv = soup_.face(cluster.front());
-    const EVector n = CGAL::cross_product(points_[fv[1]] - points_[fv[0]], points_[fv[2]] - points_[fv[0]]);
+    plan.n = CGAL::cross_product(points_[fv[1]] - points_[fv[0]], points_[fv[2]] - points_[fv[0]]);
+    const EVector& n = plan.n;
     int k = 0;
     for (int a = 1; a < 3; ++a)
       if (std::abs(CGAL::to_double(n[a])) > std::abs(CGAL::to_double(n[k]))) k = a;
     if (CGAL::is_zero(n[k])) k = !CGAL::is_zero(n[0]) ? 0 : !CGAL::is_zero(n[1]) ? 1 : 2;
-    const int i = kept_axes(k)[0], j = kept_axes(k)[1];
-    CDT cdt;
-    std::unordered_map<Index, CDT::Vertex_handle> placed;  // points inserted where they are known to lie
-    auto insert = [&](Index id) {
-      if (const auto it = placed.find(id); it != placed.end()) return it->second;
-      const CDT::Vertex_handle h = cdt.insert(proj(points_[id], i, j));
-      if (h->info().id < 0) h->info().id = id;
-      // a point inserted again (a segment's end is the next one's start)
-      // would be located anew and found equal to its vertex: an exact test
-      placed.emplace(id, h);
-      return h;
-    };
-    // each member's corners in the projection and its orientation there
-    std::vector<std::array<K::Point_2, 3>> corners;
-    std::vector<int> sign;
-    for (Index m : cluster) {
-      const FaceView mv = soup_.face(m);
-      std::array<CDT::Vertex_handle, 3> h;
-      for (int e = 0; e < 3; ++e) h[e] = insert(mv[e]);
-      if (cluster.size() > 1)
-        for (int e = 0; e < 3; ++e) cdt.insert_constraint(h[e], h[(e + 1) % 3]);
-      corners.push_back({h[0]->point(), h[1]->point(), h[2]->point()});
-      sign.push_back(int(CGAL::orientation(corners.back()[0], corners.back()[1], corners.back()[2])));
-    }
+    plan.k = k;
+    plan.i = kept_axes(k)[0];
+    plan.j = kept_axes(k)[1];
     const auto t0 = std::chrono::steady_clock::now();
     for (Index m : cluster)
       for (Index u : partners_[m])
-        if (root(u) != root(m)) segment(m, u);
-    if (cluster.size() == 1) {
-      place_edge_points(cdt, t, i, j, placed);
-      insert_segments(cdt, t, i, j, insert);
-    } else {
-      for (Index m : cluster)
-        for (Index u : partners_[m]) {
-          if (root(u) == root(m)) continue;  // the cluster's own edges are constraints already
+        if (root(u) != root(m)) {
           const Ends& seg = segment(m, u);
-          if (seg.size() == 1) insert(seg[0]);
-          if (seg.size() == 2) cdt.insert_constraint(insert(seg[0]), insert(seg[1]));
+          if (cluster.size() > 1) plan.meets.push_back(seg);  // the cluster's own edges are constraints already
         }
-    }
+    if (cluster.size() == 1) plan_segments(t, plan);
     seconds_intersections += seconds_since(t0);
-    // crossings of segments (§3.5 step 2), lifted back onto the plane
-    const EPoint A = points_[fv[0]];  // a copy: vertex_id() below grows points_
-    for (auto h = cdt.finite_vertices_begin(); h != cdt.finite_vertices_end(); ++h) {
-      if (h->info().id >= 0) continue;
-      std::array<K::FT, 3> c;
-      c[i] = h->point().x();
-      c[j] = h->point().y();
-      c[k] = A[k] - (n[i] * (c[i] - A[i]) + n[j] * (c[j] - A[j])) / n[k];
-      h->info().id = vertex_id(EPoint(c[0], c[1], c[2]));
-    }
-    for (Index m : cluster) kill(m);
-    std::vector<Index> made;
-    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
-      f->info() = kNoPiece;
-      // net count of the members covering this face (counter-clockwise: +1)
-      int count = sign[0];
-      Index source = cluster.front();
-      if (cluster.size() > 1) {
-        const K::Point_2 c = CGAL::centroid(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point());
-        count = 0;
-        std::vector<std::size_t> covering;
-        for (std::size_t m = 0; m < cluster.size(); ++m) {
-          bool inside = true;
-          for (int e = 0; e < 3 && inside; ++e)
-            inside = int(CGAL::orientation(corners[m][e], corners[m][(e + 1) % 3], c)) == sign[m];
-          if (!inside) continue;
-          count += sign[m];
-          covering.push_back(m);
-        }
-        if (count == 0) continue;  // opposite sheets cancel (or no member there)
-        for (std::size_t m : covering)  // provenance: a member oriented like the piece
-          if (sign[m] * count > 0) {
-            source = cluster[m];
-            break;
-          }
-      }
-      std::array<Index, 3> v{Index(f->vertex(0)->info().id), Index(f->vertex(1)->info().id),
-                             Index(f->vertex(2)->info().id)};
-      if (count < 0) std::swap(v[1], v[2]);
-      const Index q = Index(pieces_.size());
-      Piece piece{v, source};
-      piece.weight = std::abs(count);
-      pieces_.push_back(piece);
-      made.push_back(q);
-      f->info() = q;
-    }
-    // Each piece's edges: the other piece across an unconstrained edge inside
-    // the triangulation, or, for the rest, an entry in the edge lookup.
-    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
-      const Index q = f->info();
-      if (q == kNoPiece) continue;
-      Piece& piece = pieces_[q];
-      for (int e = 0; e < 3; ++e) {
-        const Index a = piece.v[e], b = piece.v[(e + 1) % 3];
-        int opposite = 0;  // f's vertex opposite edge ab
-        while (Index(f->vertex(opposite)->info().id) == a || Index(f->vertex(opposite)->info().id) == b) ++opposite;
-        const CDT::Face_handle g = f->neighbor(opposite);
-        if (!f->is_constrained(opposite) && !cdt.is_infinite(g) && g->info() != kNoPiece)
-          piece.across[e] = g->info();
-        else
-          edges_[undirected_edge_key(a, b)].push_back(q);
-      }
-    }
-    for (Index m : cluster) subs_[m] = made;
-    r_.sub_triangles += made.size();
+    return plan;
   }
 
   /// §3.5 step 2 for a triangle t alone in its plane: its segments go in as
@@ -691,18 +666,12 @@ class Regularizer {
   /// from the input's doubles, instead of three lifted from the constrained
   /// triangulation's own crossings and proved equal exactly. Anything less
   /// generic (segments touching or overlapping) is left to the triangulation.
-  template <class Insert>
-  void insert_segments(CDT& cdt, Index t, int i, int j, Insert& insert) {
-    struct Seg {
-      Index a, b, u;
-      K::Point_2 pa, pb;
-      CGAL::Bbox_2 box;
-      std::vector<Index> on;  // crossings, by id
-    };
-    std::vector<Seg> segs;
+  void plan_segments(Index t, Plan& plan) {
+    const int i = plan.i, j = plan.j;
+    std::vector<Seg>& segs = plan.segs;
     for (Index u : partners_[t]) {
       const Ends& seg = segment(t, u);
-      if (seg.size() == 1) insert(seg[0]);
+      if (seg.size() == 1) plan.lone.push_back(seg[0]);
       if (seg.size() != 2 || seg[0] == seg[1]) continue;
       Seg x{seg[0], seg[1], u, proj(points_[seg[0]], i, j), proj(points_[seg[1]], i, j), {}, {}};
       x.box = x.pa.bbox() + x.pb.bbox();
@@ -730,15 +699,141 @@ class Regularizer {
       std::sort(x.on.begin(), x.on.end());
       x.on.erase(std::unique(x.on.begin(), x.on.end()), x.on.end());
       std::sort(x.on.begin(), x.on.end(), [&](Index m, Index n) { return up ? key(m) < key(n) : key(n) < key(m); });
-      CDT::Vertex_handle from = insert(x.a);
-      for (Index id : x.on) {
-        const CDT::Vertex_handle h = insert(id);
-        if (h != from) cdt.insert_constraint(from, h);
-        from = h;
-      }
-      const CDT::Vertex_handle end = insert(x.b);
-      if (end != from) cdt.insert_constraint(from, end);
     }
+  }
+
+  /// The constrained triangulation of t's plan; reads shared state only
+  /// (points, the points on input edges), so triangles go in parallel.
+  Triangulated triangulate(const Plan& plan, Index t) const {
+    const Ids& cluster = plan.cluster;
+    const int i = plan.i, j = plan.j, k = plan.k;
+    CDT cdt;
+    std::unordered_map<Index, CDT::Vertex_handle> placed;  // points inserted where they are known to lie
+    auto insert = [&](Index id) {
+      if (const auto it = placed.find(id); it != placed.end()) return it->second;
+      const CDT::Vertex_handle h = cdt.insert(proj(points_[id], i, j));
+      if (h->info().id < 0) h->info().id = id;
+      // a point inserted again (a segment's end is the next one's start)
+      // would be located anew and found equal to its vertex: an exact test
+      placed.emplace(id, h);
+      return h;
+    };
+    // each member's corners in the projection and its orientation there
+    std::vector<std::array<K::Point_2, 3>> corners;
+    std::vector<int> sign;
+    for (Index m : cluster) {
+      const FaceView mv = soup_.face(m);
+      std::array<CDT::Vertex_handle, 3> h;
+      for (int e = 0; e < 3; ++e) h[e] = insert(mv[e]);
+      if (cluster.size() > 1)
+        for (int e = 0; e < 3; ++e) cdt.insert_constraint(h[e], h[(e + 1) % 3]);
+      corners.push_back({h[0]->point(), h[1]->point(), h[2]->point()});
+      sign.push_back(int(CGAL::orientation(corners.back()[0], corners.back()[1], corners.back()[2])));
+    }
+    if (cluster.size() == 1) {
+      place_edge_points(cdt, t, i, j, placed);
+      for (Index id : plan.lone) insert(id);
+      for (const Seg& x : plan.segs) {
+        CDT::Vertex_handle from = insert(x.a);
+        for (Index id : x.on) {
+          const CDT::Vertex_handle h = insert(id);
+          if (h != from) cdt.insert_constraint(from, h);
+          from = h;
+        }
+        const CDT::Vertex_handle end = insert(x.b);
+        if (end != from) cdt.insert_constraint(from, end);
+      }
+    } else {
+      for (const Ends& seg : plan.meets) {
+        if (seg.size() == 1) insert(seg[0]);
+        if (seg.size() == 2) cdt.insert_constraint(insert(seg[0]), insert(seg[1]));
+      }
+    }
+    Triangulated out;
+    // crossings of segments (§3.5 step 2), lifted back onto the plane
+    const EVector& n = plan.n;
+    const EPoint& A = points_[soup_.face(cluster.front())[0]];
+    for (auto h = cdt.finite_vertices_begin(); h != cdt.finite_vertices_end(); ++h) {
+      if (h->info().id >= 0) continue;
+      std::array<K::FT, 3> c;
+      c[i] = h->point().x();
+      c[j] = h->point().y();
+      c[k] = A[k] - (n[i] * (c[i] - A[i]) + n[j] * (c[j] - A[j])) / n[k];
+      h->info().id = -1 - std::int64_t(out.lifted.size());
+      out.lifted.emplace_back(c[0], c[1], c[2]);
+    }
+    std::vector<std::array<CDT::Vertex_handle, 3>> corner_of;  // per face made, its corners in piece order
+    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+      f->info() = kNoPiece;
+      // net count of the members covering this face (counter-clockwise: +1)
+      int count = sign[0];
+      Index source = cluster.front();
+      if (cluster.size() > 1) {
+        const K::Point_2 c = CGAL::centroid(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point());
+        count = 0;
+        std::vector<std::size_t> covering;
+        for (std::size_t m = 0; m < cluster.size(); ++m) {
+          bool inside = true;
+          for (int e = 0; e < 3 && inside; ++e)
+            inside = int(CGAL::orientation(corners[m][e], corners[m][(e + 1) % 3], c)) == sign[m];
+          if (!inside) continue;
+          count += sign[m];
+          covering.push_back(m);
+        }
+        if (count == 0) continue;  // opposite sheets cancel (or no member there)
+        for (std::size_t m : covering)  // provenance: a member oriented like the piece
+          if (sign[m] * count > 0) {
+            source = cluster[m];
+            break;
+          }
+      }
+      std::array<CDT::Vertex_handle, 3> h{f->vertex(0), f->vertex(1), f->vertex(2)};
+      if (count < 0) std::swap(h[1], h[2]);
+      f->info() = Index(out.faces.size());
+      out.faces.push_back({{h[0]->info().id, h[1]->info().id, h[2]->info().id}, source, std::abs(count), {-1, -1, -1}});
+      corner_of.push_back(h);
+    }
+    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+      if (f->info() == kNoPiece) continue;
+      SubFace& face = out.faces[f->info()];
+      for (int e = 0; e < 3; ++e) {
+        const int opposite = f->index(corner_of[f->info()][(e + 2) % 3]);  // f's vertex opposite edge e
+        const CDT::Face_handle g = f->neighbor(opposite);
+        if (!f->is_constrained(opposite) && !cdt.is_infinite(g) && g->info() != kNoPiece)
+          face.across[e] = std::int32_t(g->info());
+      }
+    }
+    return out;
+  }
+
+  /// The pieces of a planned and triangulated cluster.
+  void commit(const Plan& plan, const Triangulated& tri) {
+    for (Index m : plan.cluster) {
+      split_[m] = 1;
+      kill(m);
+    }
+    r_.triangles_split += plan.cluster.size();
+    std::vector<Index> lifted;
+    for (const EPoint& p : tri.lifted) lifted.push_back(vertex_id(p));
+    const Index base = Index(pieces_.size());
+    std::vector<Index> made;
+    for (const SubFace& face : tri.faces) {
+      std::array<Index, 3> v;
+      for (int e = 0; e < 3; ++e) v[e] = face.v[e] >= 0 ? Index(face.v[e]) : lifted[std::size_t(-1 - face.v[e])];
+      Piece piece{v, face.source};
+      piece.weight = face.weight;
+      for (int e = 0; e < 3; ++e)
+        if (face.across[e] >= 0) piece.across[e] = base + Index(face.across[e]);
+      made.push_back(Index(pieces_.size()));
+      pieces_.push_back(piece);
+    }
+    // the edges without a piece across go into the edge lookup
+    for (Index q : made)
+      for (int e = 0; e < 3; ++e)
+        if (pieces_[q].across[e] == kNoPiece)
+          edges_[undirected_edge_key(pieces_[q].v[e], pieces_[q].v[(e + 1) % 3])].push_back(q);
+    for (Index m : plan.cluster) subs_[m] = made;
+    r_.sub_triangles += made.size();
   }
 
   /// The point common to the planes of input faces t, u and w (nullopt when
@@ -876,7 +971,7 @@ class Regularizer {
   /// named by edge_crossing) at their place: sorted along each edge and
   /// split into it, so the triangulation never tests their (exactly zero)
   /// orientation against the edge.
-  void place_edge_points(CDT& cdt, Index t, int i, int j, std::unordered_map<Index, CDT::Vertex_handle>& placed) {
+  void place_edge_points(CDT& cdt, Index t, int i, int j, std::unordered_map<Index, CDT::Vertex_handle>& placed) const {
     const FaceView fv = soup_.face(t);
     std::array<CDT::Vertex_handle, 3> corner;
     for (auto h = cdt.finite_vertices_begin(); h != cdt.finite_vertices_end(); ++h)
@@ -943,6 +1038,9 @@ class Regularizer {
   std::vector<std::vector<Index>> partners_;  // per input face: the faces it intersects
   std::vector<char> split_, closed_, registered_;
   std::vector<std::vector<Index>> subs_;  // per input face: its sub-triangles
+  std::vector<Index> slot_;                // per cluster root: its plan and triangulation
+  std::vector<Plan> plans_;
+  std::vector<Triangulated> triangulated_;  // until committed
   std::vector<Piece> pieces_;             // input faces (ids 0..F-1), then sub-triangles
   std::unordered_map<std::uint64_t, Ids> edges_;                      // sub-triangles by edge
   std::vector<std::pair<std::uint64_t, Index>> face_edges_;           // (edge, input face), sorted
