@@ -563,20 +563,17 @@ class Regularizer {
   // pieces when the growth reaches the triangle, so pieces are numbered in
   // the growth's order as before.
 
-  /// A segment of a triangle alone in its plane (its intersection with
-  /// partner u), projected, with the crossings on it in order from a to b.
-  struct Seg {
-    Index a, b, u;
-    K::Point_2 pa, pb;
-    CGAL::Bbox_2 box;
-    std::vector<Index> on;  // crossings, by id
+  /// A segment of a triangle alone in its plane (its intersection with a
+  /// partner) from a to b through the crossings on it, in order.
+  struct Chain {
+    Index a, b;
+    std::vector<Index> on;
   };
   struct Plan {
     Ids cluster;
-    EVector n;              // the cluster's normal
     int k = 0, i = 0, j = 0;  // projection along axis k onto (i, j)
     std::vector<Index> lone;  // a triangle alone: single-point intersections, in partner order
-    std::vector<Seg> segs;    // a triangle alone: its segments
+    std::vector<Chain> segs;  // a triangle alone: its segments
     std::vector<Ends> meets;  // a cluster: its members' intersections with other planes
   };
   /// A sub-triangulation's faces that are pieces. A vertex is a global id,
@@ -625,6 +622,11 @@ class Regularizer {
     triangulated_[s] = Triangulated();
   }
 
+  EVector normal(Index f) const {
+    const FaceView fv = soup_.face(f);
+    return CGAL::cross_product(points_[fv[1]] - points_[fv[0]], points_[fv[2]] - points_[fv[0]]);
+  }
+
   Plan plan(Index t) {
     Plan plan;
     plan.cluster = cluster_of(t);
@@ -636,9 +638,7 @@ class Regularizer {
       for (Index u : partners_[m])
         for (Index v : soup_.face(u)) register_vertex(v);
     }
-    const FaceView fv = soup_.face(cluster.front());
-    plan.n = CGAL::cross_product(points_[fv[1]] - points_[fv[0]], points_[fv[2]] - points_[fv[0]]);
-    const EVector& n = plan.n;
+    const EVector n = normal(cluster.front());
     int k = 0;
     for (int a = 1; a < 3; ++a)
       if (std::abs(CGAL::to_double(n[a])) > std::abs(CGAL::to_double(n[k]))) k = a;
@@ -668,7 +668,13 @@ class Regularizer {
   /// generic (segments touching or overlapping) is left to the triangulation.
   void plan_segments(Index t, Plan& plan) {
     const int i = plan.i, j = plan.j;
-    std::vector<Seg>& segs = plan.segs;
+    struct Seg {  // projected
+      Index a, b, u;
+      K::Point_2 pa, pb;
+      CGAL::Bbox_2 box;
+      std::vector<Index> on;  // crossings, by id
+    };
+    std::vector<Seg> segs;
     for (Index u : partners_[t]) {
       const Ends& seg = segment(t, u);
       if (seg.size() == 1) plan.lone.push_back(seg[0]);
@@ -699,6 +705,7 @@ class Regularizer {
       std::sort(x.on.begin(), x.on.end());
       x.on.erase(std::unique(x.on.begin(), x.on.end()), x.on.end());
       std::sort(x.on.begin(), x.on.end(), [&](Index m, Index n) { return up ? key(m) < key(n) : key(n) < key(m); });
+      plan.segs.push_back({x.a, x.b, std::move(x.on)});
     }
   }
 
@@ -733,7 +740,7 @@ class Regularizer {
     if (cluster.size() == 1) {
       place_edge_points(cdt, t, i, j, placed);
       for (Index id : plan.lone) insert(id);
-      for (const Seg& x : plan.segs) {
+      for (const Chain& x : plan.segs) {
         CDT::Vertex_handle from = insert(x.a);
         for (Index id : x.on) {
           const CDT::Vertex_handle h = insert(id);
@@ -751,10 +758,12 @@ class Regularizer {
     }
     Triangulated out;
     // crossings of segments (§3.5 step 2), lifted back onto the plane
-    const EVector& n = plan.n;
     const EPoint& A = points_[soup_.face(cluster.front())[0]];
+    std::optional<EVector> normal_here;
     for (auto h = cdt.finite_vertices_begin(); h != cdt.finite_vertices_end(); ++h) {
       if (h->info().id >= 0) continue;
+      if (!normal_here) normal_here = normal(cluster.front());
+      const EVector& n = *normal_here;
       std::array<K::FT, 3> c;
       c[i] = h->point().x();
       c[j] = h->point().y();

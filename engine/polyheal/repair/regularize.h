@@ -15,12 +15,12 @@
 //                 sub-triangulation splits it at. Which faces intersect is
 //                 decided by the oracle's global pass (exact predicates on the
 //                 doubles, cheap); the intersection *segments* are constructed
-//                 lazily (below).
+//                 before the growth (below).
 //   2. grow       the valid region (§3.4) from seed triangles (§3.3) through
 //                 intersection-free neighbours. A partially valid triangle is
-//                 sub-triangulated when the wave front reaches it (§3.5): its
-//                 intersection segments with every triangle it meets are
-//                 constructed exactly (Epeck), and a constrained Delaunay
+//                 sub-triangulated (§3.5): its intersection segments with
+//                 every triangle it meets are constructed exactly (rationals
+//                 from the doubles, exact_meet.h), and a constrained Delaunay
 //                 triangulation in its own plane (dropping the dominant normal
 //                 axis, an exact projection) splits its edges at the segments'
 //                 ends and the segments at their mutual crossings. The wave
@@ -55,9 +55,14 @@
 //   separates a wedge of winding <= 0 from one of winding >= 1 and faces the
 //   first. In the paper's case (two triangles crossing) this is the
 //   orientation-compatible sub-triangle of the counterpart.
-// - Laziness (§5 suggestion). Nothing is computed up front: a triangle's
-//   segments and sub-triangulation when the wave front reaches it or a
-//   triangle it touches.
+// - Laziness (§5 suggestion), measured and dropped. The paper grows from one
+//   seed and never needs what its wave does not reach; with a seed in every
+//   component, every intersecting triangle is sub-triangulated in the end
+//   (the growth computed them lazily until 2026-12-05, and split the ones it
+//   had not reached afterwards). So the segments and their crossings are
+//   constructed up front (sequentially: they get their point ids there),
+//   the sub-triangulations are built in parallel, and the growth turns them
+//   into pieces in its own order.
 //
 // Coplanar overlaps (and duplicate faces): the triangles overlapping in one
 // plane are sub-triangulated together, and a piece covered by several of them
@@ -105,7 +110,7 @@ struct RegularizeReport {
   double bbox_diagonal = 0;
   // growing (the paper's Table 1 and Fig. 2 groups, counted over input triangles)
   std::size_t segments = 0;            // intersection segments constructed (pairs, exactly)
-  std::size_t triangles_split = 0;     // triangles sub-triangulated (lazily)
+  std::size_t triangles_split = 0;     // triangles sub-triangulated
   std::size_t split_unreached = 0;     // of those, split by the final pass (no wave reached them)
   std::size_t sub_triangles = 0;       // sub-triangles they were split into
   std::size_t valid = 0, partially_valid = 0, invalid = 0;
