@@ -600,10 +600,14 @@ class Regularizer {
       if (!partners_[f].empty() && root(Index(f)) == f) roots.push_back(Index(f));
     slot_.assign(soup_.face_count(), kNoPiece);
     plans_.reserve(roots.size());
+    const auto t0 = std::chrono::steady_clock::now();
+    precompute_crossings();
+    seconds_intersections += seconds_since(t0);
     for (Index t : roots) {
       slot_[t] = Index(plans_.size());
       plans_.push_back(plan(t));
     }
+    known_crossings_ = {};
     triangulated_.resize(roots.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, roots.size()), [&](const tbb::blocked_range<std::size_t>& r) {
       for (std::size_t s = r.begin(); s != r.end(); ++s) triangulated_[s] = triangulate(plans_[s], roots[s]);
@@ -880,7 +884,8 @@ class Regularizer {
     const auto [it, inserted] = segments_.try_emplace(undirected_edge_key(t, u));
     if (!inserted) return it->second;
     ++r_.segments;
-    if (generic_segment(t, u, it->second)) return it->second;
+    if (generic_segment(t, u, it->second, [this](Index p, Index q, Index w) { return edge_crossing(p, q, w); }))
+      return it->second;
     auto tri = [&](Index f) {
       const FaceView fv = soup_.face(f);
       return K::Triangle_3(points_[fv[0]], points_[fv[1]], points_[fv[2]]);
@@ -905,14 +910,17 @@ class Regularizer {
   /// the input's doubles. Then each end of their segment is where an edge of
   /// one crosses the other, and is named by that pair, so the neighbour
   /// sharing the edge gets the same point without comparing exact numbers.
-  /// False (ids untouched) when not in general position.
-  bool generic_segment(Index t, Index u, Ends& ids) {
+  /// False (ids untouched) when not in general position. `cross(p, q, w)`
+  /// names the point where edge pq crosses face w (edge_crossing, or a
+  /// pass that only collects the names).
+  template <class Cross>
+  bool generic_segment(Index t, Index u, Ends& ids, const Cross& cross) const {
     const FaceView tv = soup_.face(t), uv = soup_.face(u);
     auto ip = [&](Index v) { return IK::Point_3(soup_.points[v][0], soup_.points[v][1], soup_.points[v][2]); };
     const std::array<IK::Point_3, 3> a{ip(tv[0]), ip(tv[1]), ip(tv[2])}, b{ip(uv[0]), ip(uv[1]), ip(uv[2])};
     int shared = 0;
     for (Index x : tv) shared += (x == uv[0] || x == uv[1] || x == uv[2]) ? 1 : 0;
-    if (shared == 1) return generic_shared_vertex(t, tv, a, u, uv, b, ids);
+    if (shared == 1) return generic_shared_vertex(t, tv, a, u, uv, b, ids, cross);
     if (shared > 1) return false;
     std::array<CGAL::Orientation, 3> oa, ob;
     for (int k = 0; k < 3; ++k) {
@@ -933,7 +941,7 @@ class Regularizer {
           if (side[k] == CGAL::COPLANAR) return false;  // through an edge or a corner of y
         }
         if (side[0] != side[1] || side[1] != side[2]) continue;  // passes beside y
-        found.push_back(edge_crossing(xv[e], xv[f], y_face));
+        found.push_back(cross(xv[e], xv[f], y_face));
       }
       return true;
     };
@@ -946,8 +954,10 @@ class Regularizer {
   /// generic_segment() for triangles sharing one vertex s (a raw offset's
   /// face and the strip beside it): their segment runs from s to where the
   /// edge opposite s in one of them crosses the other.
+  template <class Cross>
   bool generic_shared_vertex(Index t, const FaceView& tv, const std::array<IK::Point_3, 3>& a, Index u,
-                             const FaceView& uv, const std::array<IK::Point_3, 3>& b, Ends& ids) {
+                             const FaceView& uv, const std::array<IK::Point_3, 3>& b, Ends& ids,
+                             const Cross& cross) const {
     Index s = 0;
     for (Index x : tv)
       if (x == uv[0] || x == uv[1] || x == uv[2]) s = x;
@@ -967,7 +977,7 @@ class Regularizer {
         side[j] = CGAL::orientation(x[e], x[f], y[j], y[(j + 1) % 3]);
         if (side[j] == CGAL::COPLANAR) return false;
       }
-      if (side[0] == side[1] && side[1] == side[2]) found.push_back(edge_crossing(xv[e], xv[f], y_face));
+      if (side[0] == side[1] && side[1] == side[2]) found.push_back(cross(xv[e], xv[f], y_face));
       return true;
     };
     if (!opposite(tv, a, b, u) || !opposite(uv, b, a, t)) return false;
@@ -1015,14 +1025,55 @@ class Regularizer {
     }
   }
 
+  EPoint crossing_point(Index p, Index q, Index w) const {
+    detail::Homogeneous x;
+    detail::line_meets_plane(soup_.points[p], soup_.points[q], triangle(w), x);  // a point: p and q on either side
+    return exact_point(x);
+  }
+
+  /// The points the generic pairs' segments will end at (edge crossings),
+  /// found and constructed in parallel before planning hands out their ids
+  /// in its own order (the same ids as constructing them there).
+  void precompute_crossings() {
+    struct Name {
+      std::pair<std::uint64_t, Index> key;  // (edge, face), as in crossings_
+      Index p, q;
+    };
+    std::vector<std::vector<Name>> named(soup_.face_count());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, soup_.face_count()), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t t = r.begin(); t != r.end(); ++t)
+        for (Index u : partners_[t]) {
+          if (u < t) continue;  // each pair once
+          Ends ends;
+          generic_segment(Index(t), u, ends, [&](Index p, Index q, Index w) {
+            named[t].push_back({{undirected_edge_key(p, q), w}, p, q});
+            return Index(0);
+          });
+        }
+    });
+    std::vector<Name> names;
+    for (auto& list : named) names.insert(names.end(), list.begin(), list.end());
+    named = {};
+    tbb::parallel_sort(names.begin(), names.end(), [](const Name& x, const Name& y) { return x.key < y.key; });
+    names.erase(std::unique(names.begin(), names.end(), [](const Name& x, const Name& y) { return x.key == y.key; }),
+                names.end());
+    known_crossings_.resize(names.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, names.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t k = r.begin(); k != r.end(); ++k)
+        known_crossings_[k] = {names[k].key, crossing_point(names[k].p, names[k].q, names[k].key.second)};
+    });
+  }
+
   /// The point where edge pq crosses the plane of input face w (exact), by
   /// name: computed once per (edge, face).
   Index edge_crossing(Index p, Index q, Index w) {
     const auto [it, inserted] = crossings_.try_emplace({undirected_edge_key(p, q), w}, Index(0));
     if (!inserted) return it->second;
-    detail::Homogeneous x;
-    detail::line_meets_plane(soup_.points[p], soup_.points[q], triangle(w), x);  // a point: p and q on either side
-    it->second = vertex_id(exact_point(x));
+    const auto known = std::lower_bound(
+        known_crossings_.begin(), known_crossings_.end(), std::make_pair(it->first, EPoint()),
+        [](const auto& x, const auto& y) { return x.first < y.first; });
+    it->second = vertex_id(known != known_crossings_.end() && known->first == it->first ? known->second
+                                                                                          : crossing_point(p, q, w));
     on_edge_[undirected_edge_key(p, q)].push_back(it->second);
     return it->second;
   }
@@ -1061,6 +1112,7 @@ class Regularizer {
   };
   std::unordered_map<std::pair<std::uint64_t, Index>, Index, PairHash> crossings_;  // (edge, face) -> point
   std::unordered_map<std::uint64_t, std::vector<Index>> on_edge_;                   // input edge -> its crossings
+  std::vector<std::pair<std::pair<std::uint64_t, Index>, EPoint>> known_crossings_;  // by name, sorted (planning only)
   struct TripleHash {
     std::size_t operator()(const std::array<Index, 3>& k) const {
       return std::hash<std::uint64_t>()((std::uint64_t(k[0]) << 42) ^ (std::uint64_t(k[1]) << 21) ^ k[2]);
