@@ -603,9 +603,15 @@ class Regularizer {
     const auto t0 = std::chrono::steady_clock::now();
     precompute_crossings();
     seconds_intersections += seconds_since(t0);
-    for (Index t : roots) {
-      slot_[t] = Index(plans_.size());
-      plans_.push_back(plan(t));
+    // each cluster's projection axis, from its root (the front of its
+    // members), in parallel: to_double of a lazy normal can need its exact value
+    std::vector<int> axis(roots.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, roots.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t s = r.begin(); s != r.end(); ++s) axis[s] = projection_axis(roots[s]);
+    });
+    for (std::size_t r = 0; r < roots.size(); ++r) {
+      slot_[roots[r]] = Index(plans_.size());
+      plans_.push_back(plan(roots[r], axis[r]));
     }
     known_crossings_ = {};
     triangulated_.resize(roots.size());
@@ -631,7 +637,18 @@ class Regularizer {
     return CGAL::cross_product(points_[fv[1]] - points_[fv[0]], points_[fv[2]] - points_[fv[0]]);
   }
 
-  Plan plan(Index t) {
+  /// The axis a triangle is projected along: its normal's dominant one.
+  int projection_axis(Index t) const {
+    const EVector n = normal(t);
+    int k = 0;
+    for (int a = 1; a < 3; ++a)
+      if (std::abs(CGAL::to_double(n[a])) > std::abs(CGAL::to_double(n[k]))) k = a;
+    if (CGAL::is_zero(n[k])) k = !CGAL::is_zero(n[0]) ? 0 : !CGAL::is_zero(n[1]) ? 1 : 2;
+    return k;
+  }
+
+  /// `axis`: projection_axis(t) (t: the cluster's root, its front).
+  Plan plan(Index t, int axis) {
     Plan plan;
     plan.cluster = cluster_of(t);
     const Ids& cluster = plan.cluster;
@@ -642,11 +659,7 @@ class Regularizer {
       for (Index u : partners_[m])
         for (Index v : soup_.face(u)) register_vertex(v);
     }
-    const EVector n = normal(cluster.front());
-    int k = 0;
-    for (int a = 1; a < 3; ++a)
-      if (std::abs(CGAL::to_double(n[a])) > std::abs(CGAL::to_double(n[k]))) k = a;
-    if (CGAL::is_zero(n[k])) k = !CGAL::is_zero(n[0]) ? 0 : !CGAL::is_zero(n[1]) ? 1 : 2;
+    const int k = axis;
     plan.k = k;
     plan.i = kept_axes(k)[0];
     plan.j = kept_axes(k)[1];
