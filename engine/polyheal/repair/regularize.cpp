@@ -84,10 +84,10 @@ struct XyzLess {
 
 enum State : char { kUnvisited = 0, kValid = 1, kInvalid = 2 };
 
-/// A triangle of the arrangement being classified: an input triangle, or one
-/// of the sub-triangles a partially valid triangle is split into (§3.5).
 constexpr Index kNoPiece = ~Index(0);
 
+/// A triangle of the arrangement being classified: an input triangle, or one
+/// of the sub-triangles a partially valid triangle is split into (§3.5).
 struct Piece {
   std::array<Index, 3> v;  // global vertex ids, oriented like the sheets it stands for
   Index source;            // an input face it lies in (and is oriented like)
@@ -629,6 +629,7 @@ class Regularizer {
     if (split_[t] || partners_[t].empty()) return;
     const Index s = slot_[root(t)];
     commit(plans_[s], triangulated_[s]);
+    plans_[s] = Plan();
     triangulated_[s] = Triangulated();
   }
 
@@ -1082,9 +1083,8 @@ class Regularizer {
   Index edge_crossing(Index p, Index q, Index w) {
     const auto [it, inserted] = crossings_.try_emplace({undirected_edge_key(p, q), w}, Index(0));
     if (!inserted) return it->second;
-    const auto known = std::lower_bound(
-        known_crossings_.begin(), known_crossings_.end(), std::make_pair(it->first, EPoint()),
-        [](const auto& x, const auto& y) { return x.first < y.first; });
+    const auto known = std::lower_bound(known_crossings_.begin(), known_crossings_.end(), it->first,
+                                        [](const auto& x, const auto& key) { return x.first < key; });
     it->second = vertex_id(known != known_crossings_.end() && known->first == it->first ? known->second
                                                                                           : crossing_point(p, q, w));
     on_edge_[undirected_edge_key(p, q)].push_back(it->second);
@@ -1113,7 +1113,7 @@ class Regularizer {
   std::vector<std::vector<Index>> subs_;  // per input face: its sub-triangles
   std::vector<Index> slot_;                // per cluster root: its plan and triangulation
   std::vector<Plan> plans_;
-  std::vector<Triangulated> triangulated_;  // until committed
+  std::vector<Triangulated> triangulated_;  // until committed (with its plan)
   std::vector<Piece> pieces_;             // input faces (ids 0..F-1), then sub-triangles
   std::unordered_map<std::uint64_t, Ids> edges_;                      // sub-triangles by edge
   std::vector<std::pair<std::uint64_t, Index>> face_edges_;           // (edge, input face), sorted
