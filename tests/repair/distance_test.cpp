@@ -284,7 +284,9 @@ TEST_CASE("distance: nearest-triangle and box queries agree with a search of eve
     const Point3d c{u(rng), u(rng) / 5, small(rng)};
     const double r = 0.05 + 0.2 * (small(rng) + 0.5);
     const Point3d lo{c[0] - r, c[1] - r, c[2] - r}, hi{c[0] + r, c[1] + r, c[2] + r};
-    const std::vector<std::size_t> got = d.triangles_near(lo, hi);
+    std::vector<std::size_t> got = d.triangles_near(lo, hi);
+    std::sort(got.begin(), got.end());
+    CHECK(std::adjacent_find(got.begin(), got.end()) == got.end());  // each triangle once (in no particular order)
     const CGAL::Bbox_3 box(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
     for (std::size_t f = 0; f < s.face_count(); ++f) {
       const InputKernel::Point_3 a(corner(f, 0)[0], corner(f, 0)[1], corner(f, 0)[2]),
@@ -294,8 +296,8 @@ TEST_CASE("distance: nearest-triangle and box queries agree with a search of eve
       if (CGAL::do_intersect(box, InputKernel::Triangle_3(a, b, e))) CHECK(listed);  // it meets the box
       if (!CGAL::do_overlap(box, a.bbox() + b.bbox() + e.bbox())) CHECK(!listed);  // its box misses it
     }
-    CHECK(std::is_sorted(got.begin(), got.end()));
   }
+
 }
 
 TEST_CASE("distance: a wall removed inside a union counts as removed, not as moved", "[repair][distance]") {
@@ -332,4 +334,33 @@ TEST_CASE("distance: input wholly inside the other surface, just under it all ov
   const double error = 1e-4;
   CHECK(detail::one_sided_distance_skipping(inner, outer, error, inside) == 0);
   CHECK(detail::one_sided_distances(inner, outer, error)[0] > 0.005);  // the surfaces are apart
+}
+
+TEST_CASE("distance: a box query lists a triangle cut into pieces once", "[repair][distance]") {
+  // 200 small triangles and 3 needles 1000 times longer: the index cuts each
+  // needle into pieces (up to 64), and a box around everything meets them all.
+  Soup s;
+  for (int k = 0; k < 200; ++k) {
+    const Index b = static_cast<Index>(s.points.size());
+    const double x = 0.02 * k;
+    s.points.push_back({x, 0, 0});
+    s.points.push_back({x + 0.01, 0, 0});
+    s.points.push_back({x, 0.01, 0});
+    s.add_triangle(b, b + 1, b + 2);
+  }
+  for (int k = 0; k < 3; ++k) {
+    const Index b = static_cast<Index>(s.points.size());
+    s.points.push_back({0, 1.0 + k, 0});
+    s.points.push_back({10, 1.0 + k, 0});
+    s.points.push_back({0, 1.01 + k, 0});
+    s.add_triangle(b, b + 1, b + 2);
+  }
+  const detail::SurfaceDistance d(s);
+  std::vector<std::size_t> all = d.triangles_near({-1, -1, -1}, {11, 5, 1});
+  std::sort(all.begin(), all.end());
+  CHECK(all.size() == s.face_count());
+  CHECK(std::adjacent_find(all.begin(), all.end()) == all.end());
+  // a box around one needle's middle only: that needle, once
+  const std::vector<std::size_t> one = d.triangles_near({4, 1.0, -1}, {6, 1.005, 1});
+  CHECK(one == std::vector<std::size_t>{200});
 }

@@ -378,6 +378,9 @@ class Bvh {
     const double limit2 = kSplit * kSplit * longest[longest.size() / 2];
     for (std::size_t t = 0; t < triangles.size(); ++t)
       add(static_cast<std::uint32_t>(t), v3(triangles[t][0]), v3(triangles[t][1]), v3(triangles[t][2]), limit2, 0);
+    cut_.assign(triangles.size(), 0);
+    for (std::size_t i = 1; i < entries_.size(); ++i)  // a triangle's pieces are added side by side
+      if (entries_[i].triangle == entries_[i - 1].triangle) cut_[entries_[i].triangle] = 1;
     nodes_.reserve(entries_.size() / 2 + 1);
     build(0, static_cast<std::uint32_t>(entries_.size()));
   }
@@ -414,8 +417,11 @@ class Bvh {
   }
 
   /// The triangles with a piece whose box meets [lo, hi], each once, in increasing order.
+  /// The triangles with a piece whose box meets [lo, hi], each once, in no
+  /// particular order: only a triangle cut into pieces can come up twice,
+  /// and only those are sorted to drop repeats.
   std::vector<std::size_t> meeting(const Point3d& lo, const Point3d& hi) const {
-    std::vector<std::size_t> out;
+    std::vector<std::size_t> out, cut;
     if (nodes_.empty()) return out;
     auto meets = [&](const Box& b) {
       for (int k = 0; k < 3; ++k)
@@ -433,10 +439,11 @@ class Bvh {
         continue;
       }
       for (std::uint32_t i = n.a; i < n.a + n.b; ++i)
-        if (meets(entries_[i].box)) out.push_back(entries_[i].triangle);
+        if (meets(entries_[i].box)) (cut_[entries_[i].triangle] ? cut : out).push_back(entries_[i].triangle);
     }
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
+    std::sort(cut.begin(), cut.end());
+    cut.erase(std::unique(cut.begin(), cut.end()), cut.end());
+    out.insert(out.end(), cut.begin(), cut.end());
     return out;
   }
 
@@ -571,6 +578,7 @@ class Bvh {
   const Triangles& triangles_;
   const std::vector<char>& degenerate_;
   std::vector<Entry> entries_;
+  std::vector<char> cut_;  // per triangle: split into several pieces (entries)
   std::vector<Node> nodes_;
 };
 

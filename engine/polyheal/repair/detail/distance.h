@@ -47,7 +47,8 @@ class SurfaceDistance {
   /// Decided exactly on the doubles; true for a degenerate piece (not decided).
   bool meets(const std::array<Point3d, 3>& piece) const;
   /// Indices of the surface triangles whose bounding boxes meet the box
-  /// [lo, hi] (candidates for squared_distance_to).
+  /// [lo, hi] (candidates for squared_distance_to), each once, in no
+  /// particular order.
   std::vector<std::size_t> triangles_near(const Point3d& lo, const Point3d& hi) const;
   /// Distance along the ray from `origin` in direction `direction` to the
   /// first triangle it hits, ignoring the triangles in `skip` (sorted); -1
