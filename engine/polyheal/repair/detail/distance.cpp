@@ -416,7 +416,6 @@ class Bvh {
     return hit;
   }
 
-  /// The triangles with a piece whose box meets [lo, hi], each once, in increasing order.
   /// The triangles with a piece whose box meets [lo, hi], each once, in no
   /// particular order: only a triangle cut into pieces can come up twice,
   /// and only those are sorted to drop repeats.
