@@ -5,7 +5,6 @@
 #include <CGAL/AABB_segment_primitive.h>
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
-#include <CGAL/Simple_cartesian.h>
 #include <CGAL/intersections.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -1788,14 +1787,17 @@ class TriangleGrid {
 namespace detail {
 namespace {
 
-double rounded(const Z& num, const Z& den) { return nearest_double(Kernel::FT(mpq_class(num) / mpq_class(den))); }
+Point3d rounded(const Homogeneous& h) {
+  const std::array<mpq_class, 3> c = rationals(h);
+  return {nearest_double(Kernel::FT(c[0])), nearest_double(Kernel::FT(c[1])), nearest_double(Kernel::FT(c[2]))};
+}
 
 }  // namespace
 
 Meeting planes_meet(const Triangle3d& a, const Triangle3d& b, const Triangle3d& c, Point3d& out) {
   Homogeneous h;
   const Meeting m = planes_meet_exactly(a, b, c, h);
-  if (m == Meeting::point) out = {rounded(h.num.x(), h.den), rounded(h.num.y(), h.den), rounded(h.num.z(), h.den)};
+  if (m == Meeting::point) out = rounded(h);
   return m;
 }
 
@@ -1810,8 +1812,7 @@ Meeting nearest_on_planes_line(const Triangle3d& a, const Triangle3d& b, const P
   const Z3 q = exact_vector(p);
   const Z ra = na * q - da, rb = nb * q - db;
   const Z alpha = ra * bb - ab * rb, beta = aa * rb - ab * ra;
-  const Z3 num = g * q - alpha * na - beta * nb;
-  out = {rounded(num.x(), g), rounded(num.y(), g), rounded(num.z(), g)};
+  out = rounded({g * q - alpha * na - beta * nb, g});
   return Meeting::point;
 }
 

@@ -69,9 +69,8 @@ using Tree = CGAL::AABB_tree<CGAL::AABB_traits<IK, Primitive>>;
 /// filter fails on it or it is rounded (on a raw offset of 125k triangles,
 /// evaluating the lazy trees of the same points was ~15% of regularize).
 EPoint exact_point(const detail::Homogeneous& h) {
-  const mpq_class den(h.den);
-  return EPoint(K::FT(mpq_class(h.num.x()) / den), K::FT(mpq_class(h.num.y()) / den),
-                K::FT(mpq_class(h.num.z()) / den));
+  const std::array<mpq_class, 3> c = detail::rationals(h);
+  return EPoint(K::FT(c[0]), K::FT(c[1]), K::FT(c[2]));
 }
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {

@@ -10,6 +10,9 @@
 
 #include <CGAL/Mpzf.h>
 #include <CGAL/Simple_cartesian.h>
+#include <gmpxx.h>
+
+#include <array>
 
 #include "polyheal/repair/detail/plane_meet.h"
 
@@ -23,6 +26,12 @@ struct Homogeneous {
   Z3 num;
   Z den;
 };
+
+/// h's coordinates as exact rationals: one division each.
+inline std::array<mpq_class, 3> rationals(const Homogeneous& h) {
+  const mpq_class den(h.den);
+  return {mpq_class(h.num.x()) / den, mpq_class(h.num.y()) / den, mpq_class(h.num.z()) / den};
+}
 
 inline Z3 exact_vector(const Point3d& q) { return {Z(q[0]), Z(q[1]), Z(q[2])}; }
 

@@ -4,15 +4,13 @@
 // The planes' normals and offsets are polynomials in the corners' doubles,
 // computed exactly without normalisation (Mpzf, exact_meet.h); one rational
 // division per coordinate at the end, rounded to the nearest double (ties to
-// even). The
-// same point as Epeck's Plane_3 intersection (three planes) or Line_3
-// projection (two), correctly rounded, without evaluating their lazy trees
-// (hornbug: 0.3 s of a 0.5 s sharpening). Defined in rebuild.cpp, its user;
-// declared here, without CGAL, for the test against Epeck.
+// even). The same point as Epeck's Plane_3 intersection (three planes) or
+// Line_3 projection (two), correctly rounded, without evaluating their lazy
+// trees (hornbug: 0.3 s of a 0.5 s sharpening). Defined in rebuild.cpp, its
+// user; declared here, without CGAL, for the test against Epeck.
 #pragma once
 
 #include <array>
-#include <optional>
 
 #include "polyheal/mesh/soup.h"
 
