@@ -162,3 +162,51 @@ TEST_CASE("plane_slice: every cap of CAD tessellations removed, none created", "
 TEST_CASE("plane_slice: Fig. 1 fan cylinder, slices that would create caps are refused", "[repair][paper]") {
   check_all_caps_removed("cad_cylinder.off", true);
 }
+
+// Split points are computed on integers (exact_meet.h) from the edge's ends
+// and the plane, whatever their kind: doubles, or rationals that are not
+// (earlier slices' points), with coefficients of every sign. Each must lie
+// exactly on the plane and on the triangle it was cut from.
+TEST_CASE("plane_slice: split points lie exactly on the plane and on their parent faces", "[repair]") {
+  const Kernel::FT third = Kernel::FT(1) / Kernel::FT(3);
+  const std::vector<Kernel::Plane_3> planes{
+      Kernel::Plane_3(Point(0.1, -0.2, 0.05), Kernel::Vector_3(0.3, -0.7, 0.2)),  // through doubles
+      Kernel::Plane_3(Point(third, -third / 7, third / 11), Kernel::Vector_3(-third, Kernel::FT(2) / 7, -third)),
+      Kernel::Plane_3(Kernel::FT(-1), Kernel::FT(0), Kernel::FT(0.5), Kernel::FT(0))};  // a zero coefficient
+  for (bool rational : {false, true})
+    for (bool local : {false, true}) {
+      INFO((rational ? "rational corners" : "double corners") << (local ? ", local" : ", global"));
+      Mesh m = load(test::icosphere(1.0, 2));
+      if (rational)  // corners that are no doubles
+        for (vertex_descriptor v : m.vertices()) m.point(v) = CGAL::ORIGIN + (m.point(v) - CGAL::ORIGIN) * third;
+      for (const Kernel::Plane_3& plane : planes) {
+        std::map<face_descriptor, Kernel::Triangle_3> before;
+        for (face_descriptor f : m.faces()) {
+          const halfedge_descriptor h = m.halfedge(f);
+          before.emplace(f, Kernel::Triangle_3(m.point(m.source(h)), m.point(m.target(h)),
+                                               m.point(m.target(m.next(h)))));
+        }
+        SliceOptions o;
+        o.verify = false;
+        if (local)
+          for (face_descriptor f : m.faces()) {
+            bool above = false, below = false;
+            for (vertex_descriptor v : CGAL::vertices_around_face(m.halfedge(f), m)) {
+              above |= plane.oriented_side(m.point(v)) == CGAL::ON_POSITIVE_SIDE;
+              below |= plane.oriented_side(m.point(v)) == CGAL::ON_NEGATIVE_SIDE;
+            }
+            if (above && below) {
+              o.seed = f;
+              break;
+            }
+          }
+        const detail::SliceResult r = detail::slice_by_plane(m, plane, o);
+        REQUIRE(m.is_valid(false));
+        REQUIRE(r.edges_split >= 8);  // a loop around the sphere
+        for (vertex_descriptor v : r.vertices) CHECK(plane.has_on(m.point(v)));
+        for (std::size_t i = 0; i < r.faces.size(); ++i)
+          for (vertex_descriptor v : CGAL::vertices_around_face(m.halfedge(r.faces[i]), m))
+            CHECK(before.at(r.parents[i]).has_on(m.point(v)));
+      }
+    }
+}

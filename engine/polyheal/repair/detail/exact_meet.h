@@ -35,6 +35,55 @@ inline std::array<mpq_class, 3> rationals(const Homogeneous& h) {
 
 inline Z3 exact_vector(const Point3d& q) { return {Z(q[0]), Z(q[1]), Z(q[2])}; }
 
+/// An integer as an Mpzf. (CGAL 5.5's Mpzf(mpz_class) drops the sign and
+/// mishandles zero: only a positive magnitude goes through it.)
+inline Z integer(const mpz_class& z) {
+  const int s = sgn(z);
+  if (s == 0) return Z(0);
+  const Z magnitude{mpz_class(abs(z))};
+  return s > 0 ? magnitude : -magnitude;
+}
+
+/// Rationals scaled by the least common multiple of their denominators (a
+/// positive factor): integers with the same signs and ratios.
+template <std::size_t N>
+std::array<Z, N> common_integers(const std::array<mpq_class, N>& q) {
+  mpz_class den = 1;
+  for (const mpq_class& x : q) mpz_lcm(den.get_mpz_t(), den.get_mpz_t(), x.get_den_mpz_t());
+  std::array<Z, N> out;
+  for (std::size_t i = 0; i < N; ++i) out[i] = integer(q[i].get_num() * (den / q[i].get_den()));
+  return out;
+}
+
+/// An Epeck point as a homogeneous point with integer coordinates: its own
+/// doubles over 1 when it is a double point (no exact evaluation), else its
+/// exact rationals over their common denominator.
+template <class EpeckPoint>
+Homogeneous homogeneous(const EpeckPoint& p) {
+  const auto& a = p.approx();
+  if (a.x().is_point() && a.y().is_point() && a.z().is_point())
+    return {Z3(Z(a.x().inf()), Z(a.y().inf()), Z(a.z().inf())), Z(1)};
+  const auto& e = p.exact();
+  const std::array<Z, 4> c = common_integers(std::array<mpq_class, 4>{e.x(), e.y(), e.z(), mpq_class(1)});
+  return {Z3(c[0], c[1], c[2]), c[3]};
+}
+
+/// An Epeck plane a x + b y + c z + d = 0 as integers n . x + d = 0 (scaled
+/// by a positive factor: the same plane, the same sides).
+template <class EpeckPlane>
+void integer_plane(const EpeckPlane& plane, Z3& n, Z& d) {
+  const auto& a = plane.approx();
+  if (a.a().is_point() && a.b().is_point() && a.c().is_point() && a.d().is_point()) {
+    n = Z3(Z(a.a().inf()), Z(a.b().inf()), Z(a.c().inf()));
+    d = Z(a.d().inf());
+    return;
+  }
+  const auto& e = plane.exact();
+  const std::array<Z, 4> c = common_integers(std::array<mpq_class, 4>{e.a(), e.b(), e.c(), e.d()});
+  n = Z3(c[0], c[1], c[2]);
+  d = c[3];
+}
+
 /// The plane n . x = d through t's corners; false when n = 0 (collinear corners).
 inline bool exact_plane(const Triangle3d& t, Z3& n, Z& d) {
   const Z3 o = exact_vector(t[0]);
