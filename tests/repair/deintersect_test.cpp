@@ -399,6 +399,36 @@ TEST_CASE("deintersect: no vertex moves further than --max-displacement", "[repa
   CHECK(max_move(in, written(freed, "deintersect_capped.off")) <= 0.5);
 }
 
+TEST_CASE("deintersect: fixed points never move (a region cut out of a larger surface)", "[repair][deintersect]") {
+  // The tent apex 0.3 above the plate: freed by moving the apex down, or
+  // (fixed) by moving the plate's corners instead; with the apex and the
+  // plate both fixed, nothing may move and the faces are left, reported.
+  const Soup in = test::concat(plate(0.0), tent(0.3));
+  const Index apex = 4;  // the plate's four corners come first
+  DeintersectOptions o;
+  o.max_displacement = 0.5;
+  const DeintersectResult free = remove_self_intersections(in, o);
+  REQUIRE(free.report.certified);
+  REQUIRE(distance(free.soup.points[apex], in.points[apex]) > 0);  // the case is at stake: the apex is what moves
+  std::vector<char> fixed(in.points.size(), 0);
+  fixed[apex] = 1;
+  o.fixed_points = &fixed;
+  const DeintersectResult held = remove_self_intersections(in, o);
+  REQUIRE(held.soup.points.size() == in.points.size());
+  CHECK(held.soup.points[apex] == in.points[apex]);
+  for (Index v = 0; v < 4; ++v) fixed[v] = 1;
+  const DeintersectResult none = remove_self_intersections(in, o);
+  CHECK(none.report.max_displacement == 0);
+  CHECK(none.report.intersecting_faces_out > 0);
+  for (std::size_t v = 0; v < in.points.size(); ++v)
+    if (fixed[v]) CHECK(none.soup.points[v] == in.points[v]);
+  // point i of the result is point i of the input only without welds
+  Soup twin = in;
+  twin.points.push_back(twin.points[0]);
+  fixed.push_back(0);
+  CHECK_THROWS_AS(remove_self_intersections(twin, o), UnsupportedInput);
+}
+
 TEST_CASE("deintersect: operations tried and retracted leave no trace", "[repair][deintersect]") {
   // With a clearance of a fifth of the edge length no lift fits the default
   // displacement limit, and on this tube no swap alone helps: every trial is

@@ -23,6 +23,7 @@
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/mesh.h"
 #include "polyheal/mesh/vec3.h"
+#include "polyheal/mesh/weld.h"
 #include "polyheal/repair/detail/distance.h"
 
 namespace polyheal {
@@ -1007,6 +1008,15 @@ DeintersectResult remove_self_intersections(const Soup& input, const Deintersect
   if (!built.ok)
     throw NotManifold(built.problems, "deintersect needs a manifold mesh (pinch vertices are fine)");
   mark_split_pinches(mesh);
+  if (o.fixed_points) {
+    // with no point welded, vertex i is point i (pinch copies, pinned, come after)
+    if (o.fixed_points->size() != input.points.size() || weld_identical_points(input.points).merged > 0)
+      throw UnsupportedInput("fixed points need the soup's points distinct (none welded)");
+    auto pinned = mesh.add_property_map<vertex_descriptor, char>(kVertexPinned, 0).first;
+    for (vertex_descriptor v : mesh.vertices())
+      if (static_cast<std::size_t>(v) < input.points.size() && (*o.fixed_points)[static_cast<std::size_t>(v)])
+        pinned[v] = 1;
+  }
   InspectOptions io;
   io.self_intersections = o.known_pairs;
   const Report in = inspect(input, io);

@@ -81,6 +81,12 @@ struct DeintersectOptions {
   /// Every intersecting pair of the input, sorted, when the caller has
   /// found them already (InspectOptions::self_intersections).
   const std::vector<FacePair>* known_pairs = nullptr;
+  /// Per input point, whether it must not move (a region cut out of a
+  /// larger surface: the corners it shares with the faces outside). The
+  /// points must then be distinct (UnsupportedInput otherwise), so that the
+  /// result's point i is input point i; pinch copies, which never move
+  /// either, follow them.
+  const std::vector<char>* fixed_points = nullptr;
   Observer* observer = nullptr;
 };
 

@@ -8,6 +8,7 @@
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
+#include <CGAL/box_intersection_d.h>
 #include <CGAL/intersections.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -1359,6 +1360,137 @@ std::vector<std::size_t> walls_to_leave_out(const Soup& s) {
   return std::move(walls.faces);
 }
 
+/// Repairs the pairs that rounding made intersect (every intersecting pair
+/// of `soup`, sorted) with deintersect's vertex moves on the region around
+/// them only: the faces whose boxes meet a pair's box grown by its
+/// diagonal, with every corner they share with the rest of the surface
+/// fixed (so the faces outside stay as they are). Building and indexing the
+/// whole surface for a few pairs was most of the repair (Hand1's raw
+/// offset: 168k faces for 29 pairs). Faces changed are flagged in
+/// `recheck`: a move may meet a face outside the region, which the caller's
+/// check of the changed faces finds. False, `soup` unchanged, when the region is not worth cutting out (most
+/// of the surface) or cannot be repaired alone (its mesh would need welds
+/// or pinch splits); the caller repairs the whole surface then.
+bool deintersect_locally(Soup& soup, const std::vector<FacePair>& pairs, std::vector<char>& recheck,
+                         std::size_t& moved) {
+  using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::size_t>;
+  const std::size_t n = soup.face_count();
+  auto box_of = [&](std::size_t f) {
+    CGAL::Bbox_3 b;
+    for (Index v : soup.face(f)) b += CGAL::Bbox_3(soup.points[v][0], soup.points[v][1], soup.points[v][2],
+                                                   soup.points[v][0], soup.points[v][1], soup.points[v][2]);
+    return b;
+  };
+  std::vector<Box> faces, reach;
+  faces.reserve(n);
+  for (std::size_t f = 0; f < n; ++f) faces.emplace_back(box_of(f), f);
+  for (const FacePair& p : pairs) {
+    const CGAL::Bbox_3 b = box_of(p.first) + box_of(p.second);
+    const double d = std::sqrt(CGAL::square(b.xmax() - b.xmin()) + CGAL::square(b.ymax() - b.ymin()) +
+                               CGAL::square(b.zmax() - b.zmin()));
+    reach.emplace_back(CGAL::Bbox_3(b.xmin() - d, b.ymin() - d, b.zmin() - d, b.xmax() + d, b.ymax() + d, b.zmax() + d),
+                       reach.size());
+  }
+  std::vector<char> in_region(n, 0);
+  CGAL::box_intersection_d(faces.begin(), faces.end(), reach.begin(), reach.end(),
+                           [&](const Box& f, const Box&) { in_region[f.info()] = 1; });
+  const std::size_t region = std::size_t(std::count(in_region.begin(), in_region.end(), char(1)));
+  if (region > n / 4) return false;
+  // the region as a soup of its own, faces in their order; corners used
+  // outside it fixed
+  std::vector<char> outside(soup.points.size(), 0);
+  for (std::size_t f = 0; f < n; ++f)
+    if (!in_region[f])
+      for (Index v : soup.face(f)) outside[v] = 1;
+  Soup sub;
+  constexpr Index kNone = ~Index(0);
+  std::vector<Index> sub_id(soup.points.size(), kNone), full_id;
+  std::vector<std::size_t> full_face;
+  std::vector<char> fixed;
+  for (std::size_t f = 0; f < n; ++f) {
+    if (!in_region[f]) continue;
+    std::array<Index, 3> t;
+    for (int k = 0; k < 3; ++k) {
+      const Index v = soup.face(f)[k];
+      if (sub_id[v] == kNone) {
+        sub_id[v] = Index(sub.points.size());
+        sub.points.push_back(soup.points[v]);
+        full_id.push_back(v);
+        fixed.push_back(outside[v]);
+      }
+      t[k] = sub_id[v];
+    }
+    sub.add_triangle(t[0], t[1], t[2]);
+    full_face.push_back(f);
+  }
+  std::vector<std::size_t> sub_face(n, 0);
+  for (std::size_t i = 0; i < full_face.size(); ++i) sub_face[full_face[i]] = i;
+  std::vector<FacePair> sub_pairs;  // still sorted: the faces keep their order
+  for (const FacePair& p : pairs) sub_pairs.push_back({sub_face[p.first], sub_face[p.second]});
+  double diagonal2 = 0;  // the whole surface's: the displacement limit is relative to it
+  {
+    CGAL::Bbox_3 all;
+    for (const Point3d& p : soup.points) all += CGAL::Bbox_3(p[0], p[1], p[2], p[0], p[1], p[2]);
+    if (!soup.points.empty())
+      diagonal2 = CGAL::square(all.xmax() - all.xmin()) + CGAL::square(all.ymax() - all.ymin()) +
+                  CGAL::square(all.zmax() - all.zmin());
+  }
+  DeintersectOptions d;
+  d.certify = false;
+  d.known_pairs = &sub_pairs;
+  d.fixed_points = &fixed;
+  d.max_displacement = d.max_displacement_ratio * std::sqrt(diagonal2);
+  DeintersectResult fixed_region;
+  try {
+    fixed_region = remove_self_intersections(sub, d);
+  } catch (const UnsupportedInput&) {
+    return false;
+  }
+  const Soup& out = fixed_region.soup;
+  if (out.face_count() != sub.face_count() || out.points.size() < sub.points.size()) return false;
+  // out's point j < |sub| is sub's point j; after them come copies of the
+  // region's pinch points (a corner whose faces in the region form two
+  // fans), unmoved: each is the point at its position
+  std::map<Point3d, Index> at;
+  if (out.points.size() > sub.points.size())
+    for (std::size_t j = 0; j < sub.points.size(); ++j) at.emplace(sub.points[j], Index(j));
+  std::vector<Index> to_full(out.points.size());
+  for (std::size_t j = 0; j < out.points.size(); ++j) {
+    if (j < sub.points.size()) {
+      to_full[j] = full_id[j];
+      continue;
+    }
+    const auto it = at.find(out.points[j]);
+    if (it == at.end()) return false;  // cannot happen: copies are pinned
+    to_full[j] = full_id[it->second];
+  }
+  // An edge swap inside the region must not join two of its border corners
+  // that a face outside joins already: every edge stays used exactly twice.
+  std::unordered_map<std::uint64_t, int> uses;
+  auto use = [&](Index a, Index b) { ++uses[undirected_edge_key(a, b)]; };
+  for (std::size_t i = 0; i < full_face.size(); ++i)
+    for (int k = 0; k < 3; ++k) use(to_full[out.face(i)[k]], to_full[out.face(i)[(k + 1) % 3]]);
+  for (std::size_t f = 0; f < n; ++f)
+    if (!in_region[f])
+      for (int k = 0; k < 3; ++k) {
+        const Index a = soup.face(f)[k], b = soup.face(f)[(k + 1) % 3];
+        if (sub_id[a] != kNone && sub_id[b] != kNone) use(a, b);
+      }
+  for (const auto& [edge, count] : uses)
+    if (count != 2) return false;
+  for (std::size_t j = 0; j < sub.points.size(); ++j) soup.points[full_id[j]] = out.points[j];
+  for (std::size_t i = 0; i < full_face.size(); ++i) {
+    const std::size_t f = full_face[i];
+    for (int k = 0; k < 3; ++k) {
+      const Index j = out.face(i)[k];
+      if (to_full[j] != soup.indices[3 * f + k] || out.points[j] != sub.points[sub.face(i)[k]]) recheck[f] = 1;
+      soup.indices[3 * f + k] = to_full[j];
+    }
+  }
+  moved = fixed_region.report.moved_vertices;
+  return true;
+}
+
 /// The corner polygon f is fanned from: the first whose fan has no exactly
 /// zero-area triangle (0 if none has).
 std::size_t fan_apex(const Soup& soup, std::size_t f) {
@@ -1498,14 +1630,14 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   const std::vector<FacePair> rounded = find_self_intersections(result.soup, only);
   r.rounding_pairs = rounded.size();
   if (!rounded.empty()) {
-    DeintersectOptions d;
-    d.certify = false;
-    d.known_pairs = &rounded;  // every pair: faces without a rounded corner are the exact result's
     // After the moves a pair can meet only where a face changed, or where a
     // pair found above was left as it was: only those faces are checked again.
     std::vector<char> recheck(result.soup.face_count(), 0);
     for (const FacePair& p : rounded) recheck[p.first] = recheck[p.second] = 1;
-    try {
+    if (!deintersect_locally(result.soup, rounded, recheck, r.rounding_moves)) try {
+      DeintersectOptions d;
+      d.certify = false;
+      d.known_pairs = &rounded;  // every pair: faces without a rounded corner are the exact result's
       DeintersectResult fixed = remove_self_intersections(result.soup, d);
       // its faces are the input's, in order, when it kept them all (the
       // provenance depends on it); otherwise the passes below take over
