@@ -65,13 +65,15 @@ using InputTriangles = std::vector<IK::Triangle_3>;
 using Primitive = CGAL::AABB_triangle_primitive<IK, InputTriangles::const_iterator>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<IK, Primitive>>;
 
-/// num / den as a point whose coordinates are rationals known exactly (leaves
-/// of the lazy tree, with tight intervals): nothing to evaluate when a
-/// filter fails on it or it is rounded (on a raw offset of 125k triangles,
-/// evaluating the lazy trees of the same points was ~15% of regularize).
+/// num / den as a point known exactly (a leaf of the lazy tree, with tight
+/// intervals): nothing to evaluate when a filter fails on it or it is
+/// rounded (on a raw offset of 125k triangles, evaluating the lazy trees of
+/// the same points was ~15% of regularize; a point built from three exact
+/// coordinates is still a node, whose evaluation was a fifth of the
+/// triangulations').
 EPoint exact_point(const detail::Homogeneous& h) {
   const std::array<mpq_class, 3> c = detail::rationals(h);
-  return EPoint(K::FT(c[0]), K::FT(c[1]), K::FT(c[2]));
+  return EPoint(EPoint::Rep(K::Exact_kernel::Point_3(c[0], c[1], c[2])));
 }
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -382,6 +384,15 @@ class Regularizer {
   }
 
   static K::Point_2 proj(const EPoint& p, int i, int j) { return K::Point_2(p[i], p[j]); }
+  /// proj() known exactly, for the triangulations: a leaf, not a lazy tree
+  /// over p's own (their exact orientation tests on collinear points, which
+  /// no filter decides, evaluated such a tree for every projection).
+  static K::Point_2 exact_proj(const EPoint& p, int i, int j) {
+    const auto& a = p.approx();
+    if (a[i].is_point() && a[j].is_point()) return K::Point_2(a[i].inf(), a[j].inf());
+    const auto& e = p.exact();
+    return K::Point_2(K::Point_2::Rep(K::Exact_kernel::Point_2(e[i], e[j])));
+  }
 
   // ---- growth (§3.4, §3.6) ------------------------------------------------
 
@@ -727,6 +738,23 @@ class Regularizer {
     }
   }
 
+  /// The constraint a-b. Where a-b is an edge already it is only marked:
+  /// CGAL's insert_constraint first asks each of a's other neighbours
+  /// whether it lies on a-b, and along a chain of points on one segment the
+  /// point before a always does — exactly, which no filter decides (the
+  /// triangulations' most frequent exact test). The same triangulation
+  /// either way: a Delaunay edge stays one when constrained.
+  static void constrain(CDT& cdt, CDT::Vertex_handle a, CDT::Vertex_handle b) {
+    CDT::Face_handle f;
+    int i = 0;
+    if (cdt.dimension() == 2 && cdt.is_edge(a, b, f, i)) {
+      f->set_constraint(i, true);
+      f->neighbor(i)->set_constraint(cdt.mirror_index(f, i), true);
+      return;
+    }
+    cdt.insert_constraint(a, b);
+  }
+
   /// The constrained triangulation of t's plan; reads shared state only
   /// (points, the points on input edges), so triangles go in parallel.
   Triangulated triangulate(const Plan& plan, Index t) const {
@@ -736,7 +764,7 @@ class Regularizer {
     std::unordered_map<Index, CDT::Vertex_handle> placed;  // points inserted where they are known to lie
     auto insert = [&](Index id) {
       if (const auto it = placed.find(id); it != placed.end()) return it->second;
-      const CDT::Vertex_handle h = cdt.insert(proj(points_[id], i, j));
+      const CDT::Vertex_handle h = cdt.insert(exact_proj(points_[id], i, j));
       if (h->info().id < 0) h->info().id = id;
       // a point inserted again (a segment's end is the next one's start)
       // would be located anew and found equal to its vertex: an exact test
@@ -762,11 +790,11 @@ class Regularizer {
         CDT::Vertex_handle from = insert(x.a);
         for (Index id : x.on) {
           const CDT::Vertex_handle h = insert(id);
-          if (h != from) cdt.insert_constraint(from, h);
+          if (h != from) constrain(cdt, from, h);
           from = h;
         }
         const CDT::Vertex_handle end = insert(x.b);
-        if (end != from) cdt.insert_constraint(from, end);
+        if (end != from) constrain(cdt, from, end);
       }
     } else {
       for (const Ends& seg : plan.meets) {
@@ -1031,7 +1059,7 @@ class Regularizer {
         CDT::Face_handle face;
         int index = 0;
         if (!cdt.is_edge(prev, end, face, index)) return;  // cannot happen; the general insert takes over
-        const CDT::Vertex_handle h = cdt.insert(proj(points_[id], i, j), CDT::EDGE, face, index);
+        const CDT::Vertex_handle h = cdt.insert(exact_proj(points_[id], i, j), CDT::EDGE, face, index);
         if (h->info().id < 0) h->info().id = id;
         placed.emplace(id, h);
         prev = h;
