@@ -65,16 +65,12 @@ using InputTriangles = std::vector<IK::Triangle_3>;
 using Primitive = CGAL::AABB_triangle_primitive<IK, InputTriangles::const_iterator>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<IK, Primitive>>;
 
-/// num / den as a point known exactly (a leaf of the lazy tree, with tight
-/// intervals): nothing to evaluate when a filter fails on it or it is
-/// rounded (on a raw offset of 125k triangles, evaluating the lazy trees of
-/// the same points was ~15% of regularize; a point built from three exact
-/// coordinates is still a node, whose evaluation was a fifth of the
-/// triangulations').
-EPoint exact_point(const detail::Homogeneous& h) {
-  const std::array<mpq_class, 3> c = detail::rationals(h);
-  return EPoint(EPoint::Rep(K::Exact_kernel::Point_3(c[0], c[1], c[2])));
-}
+/// num / den as a point known exactly (detail::leaf_point): nothing to
+/// evaluate when a filter fails on it or it is rounded (on a raw offset of
+/// 125k triangles, evaluating lazy trees of the same points was ~15% of
+/// regularize; a point built from three exact coordinates, a node, was a
+/// fifth of the triangulations').
+EPoint exact_point(const detail::Homogeneous& h) { return detail::leaf_point<EPoint>(h); }
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -33,6 +33,16 @@ inline std::array<mpq_class, 3> rationals(const Homogeneous& h) {
   return {mpq_class(h.num.x()) / den, mpq_class(h.num.y()) / den, mpq_class(h.num.z()) / den};
 }
 
+/// h as an Epeck point known exactly: a leaf of the lazy tree, with tight
+/// intervals (a point built from three exact coordinates would still be a
+/// node to evaluate when a filter fails on it or it is rounded).
+template <class EpeckPoint>
+EpeckPoint leaf_point(const Homogeneous& h) {
+  using Exact = typename CGAL::Kernel_traits<EpeckPoint>::Kernel::Exact_kernel::Point_3;
+  const std::array<mpq_class, 3> c = rationals(h);
+  return EpeckPoint(typename EpeckPoint::Rep(Exact(c[0], c[1], c[2])));
+}
+
 inline Z3 exact_vector(const Point3d& q) { return {Z(q[0]), Z(q[1]), Z(q[2])}; }
 
 /// An integer as an Mpzf. (CGAL 5.5's Mpzf(mpz_class) drops the sign and

@@ -253,8 +253,7 @@ class Slicer {
     const auto& [n, d] = *plane_z_;
     const Homogeneous p = homogeneous(mesh_.point(mesh_.source(h))), q = homogeneous(mesh_.point(mesh_.target(h)));
     const Z hp = n * p.num + d * p.den, hq = n * q.num + d * q.den;
-    const std::array<mpq_class, 3> c = rationals({hp * q.num - hq * p.num, hp * q.den - hq * p.den});
-    const Point x{Kernel::FT(c[0]), Kernel::FT(c[1]), Kernel::FT(c[2])};
+    const Point x = leaf_point<Point>({hp * q.num - hq * p.num, hp * q.den - hq * p.den});
     split_points_.emplace(key, x);
     return x;
   }
