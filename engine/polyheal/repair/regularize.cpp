@@ -65,6 +65,36 @@ using InputTriangles = std::vector<IK::Triangle_3>;
 using Primitive = CGAL::AABB_triangle_primitive<IK, InputTriangles::const_iterator>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<IK, Primitive>>;
 
+/// The axis of v's largest |to_double(v[a])| (the first of equals) and
+/// that value — what `if (|to_double(v[a])| > |to_double(v[k])|) k = a`
+/// finds, without exact evaluation where intervals decide it. to_double
+/// evaluates a lazy number exactly when its interval is wider than 1e-5 of
+/// its magnitude (a component exactly zero, as on axis-aligned faces and
+/// edges: most of the planning's exact evaluations on a CAD raw offset);
+/// such a component cannot be the largest when its interval's magnitude is
+/// below a component known, and then nothing needs it.
+std::pair<int, double> dominant_axis(const EVector& v) {
+  std::array<double, 3> value{};
+  std::array<bool, 3> known{};
+  double best = -1;
+  int k = -1;
+  for (int a = 0; a < 3; ++a) {
+    const CGAL::Interval_nt<false>& x = v.approx()[a];
+    known[a] = CGAL::fit_in_double(x, value[a]) ||
+               (CGAL::has_smaller_relative_precision(x, K::FT::get_relative_precision_of_to_double()) &&
+                (value[a] = CGAL::to_double(x), true));
+    if (known[a] && std::abs(value[a]) > best) best = std::abs(value[a]), k = a;
+  }
+  bool decided = k >= 0;
+  for (int a = 0; a < 3 && decided; ++a)
+    decided = known[a] || CGAL::magnitude(v.approx()[a]) < best;
+  if (decided) return {k, value[k]};
+  k = 0;  // as before: exact where to_double needs it
+  for (int a = 1; a < 3; ++a)
+    if (std::abs(CGAL::to_double(v[a])) > std::abs(CGAL::to_double(v[k]))) k = a;
+  return {k, CGAL::to_double(v[k])};
+}
+
 /// num / den as a point known exactly (detail::leaf_point): nothing to
 /// evaluate when a filter fails on it or it is rounded (on a raw offset of
 /// 125k triangles, evaluating lazy trees of the same points was ~15% of
@@ -648,10 +678,10 @@ class Regularizer {
   /// The axis a triangle is projected along: its normal's dominant one.
   int projection_axis(Index t) const {
     const EVector n = normal(t);
-    int k = 0;
-    for (int a = 1; a < 3; ++a)
-      if (std::abs(CGAL::to_double(n[a])) > std::abs(CGAL::to_double(n[k]))) k = a;
-    if (CGAL::is_zero(n[k])) k = !CGAL::is_zero(n[0]) ? 0 : !CGAL::is_zero(n[1]) ? 1 : 2;
+    int k = dominant_axis(n).first;
+    // (by the sign: CGAL 5.5's is_zero on a lazy number always evaluates it exactly)
+    auto zero = [&](int a) { return CGAL::sign(n[a]) == CGAL::ZERO; };
+    if (zero(k)) k = !zero(0) ? 0 : !zero(1) ? 1 : 2;
     return k;
   }
 
@@ -1041,11 +1071,8 @@ class Regularizer {
       std::sort(pts.begin(), pts.end());
       pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
       // along the edge from corner e: by the coordinate that changes most
-      const EPoint &from = points_[fv[e]], &to = points_[fv[(e + 1) % 3]];
-      int axis = 0;
-      for (int a = 1; a < 3; ++a)
-        if (std::abs(CGAL::to_double(to[a] - from[a])) > std::abs(CGAL::to_double(to[axis] - from[axis]))) axis = a;
-      const bool up = CGAL::to_double(to[axis] - from[axis]) > 0;
+      const auto [axis, along] = dominant_axis(points_[fv[(e + 1) % 3]] - points_[fv[e]]);
+      const bool up = along > 0;
       std::sort(pts.begin(), pts.end(), [&](Index x, Index y) {
         return up ? points_[x][axis] < points_[y][axis] : points_[y][axis] < points_[x][axis];
       });
