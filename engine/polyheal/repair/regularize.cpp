@@ -78,12 +78,18 @@ std::pair<int, double> dominant_axis(const EVector& v) {
   std::array<bool, 3> known{};
   double best = -1;
   int k = -1;
-  for (int a = 0; a < 3; ++a) {
+  for (int a = 0; a < 3; ++a) {  // to_double's own steps short of the exact one
     const CGAL::Interval_nt<false>& x = v.approx()[a];
-    known[a] = CGAL::fit_in_double(x, value[a]) ||
-               (CGAL::has_smaller_relative_precision(x, K::FT::get_relative_precision_of_to_double()) &&
-                (value[a] = CGAL::to_double(x), true));
-    if (known[a] && std::abs(value[a]) > best) best = std::abs(value[a]), k = a;
+    if (CGAL::fit_in_double(x, value[a])) {
+      known[a] = true;
+    } else if (CGAL::has_smaller_relative_precision(x, K::FT::get_relative_precision_of_to_double())) {
+      value[a] = CGAL::to_double(x);
+      known[a] = true;
+    }
+    if (known[a] && std::abs(value[a]) > best) {
+      best = std::abs(value[a]);
+      k = a;
+    }
   }
   bool decided = k >= 0;
   for (int a = 0; a < 3 && decided; ++a)
@@ -1419,9 +1425,11 @@ std::vector<std::size_t> walls_to_leave_out(const Soup& s) {
 /// whole surface for a few pairs was most of the repair (Hand1's raw
 /// offset: 168k faces for 29 pairs). Faces changed are flagged in
 /// `recheck`: a move may meet a face outside the region, which the caller's
-/// check of the changed faces finds. False, `soup` unchanged, when the region is not worth cutting out (most
-/// of the surface) or cannot be repaired alone (its mesh would need welds
-/// or pinch splits); the caller repairs the whole surface then.
+/// check of the changed faces finds. False, `soup` unchanged, when the
+/// region is not worth cutting out (over a quarter of the surface), cannot
+/// be repaired alone (points to weld), or an edge swap in it joined two of
+/// its fixed corners that a face outside joins already; the caller repairs
+/// the whole surface then.
 bool deintersect_locally(Soup& soup, const std::vector<FacePair>& pairs, std::vector<char>& recheck,
                          std::size_t& moved) {
   using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::size_t>;
