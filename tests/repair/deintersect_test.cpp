@@ -422,6 +422,24 @@ TEST_CASE("deintersect: fixed points never move (a region cut out of a larger su
   CHECK(none.report.intersecting_faces_out > 0);
   for (std::size_t v = 0; v < in.points.size(); ++v)
     if (fixed[v]) CHECK(none.soup.points[v] == in.points[v]);
+  // a pinch point (two fans at the apex: a second tent upside down on it)
+  // gets copies; they come after the input's points, where it is
+  Soup pinched = in;
+  const Index top = Index(pinched.points.size());
+  for (int k = 0; k < 6; ++k) {
+    const double a = k * 3.14159265358979323846 / 3;
+    pinched.points.push_back({std::cos(a), std::sin(a), 1.6});
+  }
+  for (Index k = 0; k < 6; ++k) pinched.add_triangle(apex, top + (k + 1) % 6, top + k);
+  std::vector<char> plate_fixed(pinched.points.size(), 0);
+  for (Index v = 0; v < 4; ++v) plate_fixed[v] = 1;
+  DeintersectOptions p = o;
+  p.fixed_points = &plate_fixed;
+  const DeintersectResult split = remove_self_intersections(pinched, p);
+  REQUIRE(split.soup.points.size() > pinched.points.size());  // the case is at stake: a copy was made
+  for (Index v = 0; v < 4; ++v) CHECK(split.soup.points[v] == pinched.points[v]);
+  for (std::size_t j = pinched.points.size(); j < split.soup.points.size(); ++j)
+    CHECK(split.soup.points[j] == split.soup.points[apex]);
   // point i of the result is point i of the input only without welds
   Soup twin = in;
   twin.points.push_back(twin.points[0]);
