@@ -94,13 +94,16 @@ MeshBuildResult soup_to_mesh_splitting_pinches(const Soup& input, Mesh& mesh, st
   const Soup soup = weld.merged ? apply_weld(input, weld) : input;
   const Topology t = analyze_topology(soup);
   std::size_t added = 0;
+  MeshBuildResult r;
   if (!t.nonmanifold_vertices.empty() && t.nonmanifold_edges.empty()) {
     const Soup fans = split_fans(soup, t.nonmanifold_vertices, added);
-    if (split) *split = added;
-    return build_mesh(fans, mesh, false);
+    r = build_mesh(fans, mesh, false);
+  } else {
+    r = build_mesh(soup, mesh, false);
   }
-  if (split) *split = 0;
-  return build_mesh(soup, mesh, false);
+  if (split) *split = added;
+  r.welded = weld.merged;
+  return r;
 }
 
 MeshBuildResult soup_to_mesh(const Soup& input, Mesh& mesh) { return build_mesh(input, mesh, true); }
@@ -151,6 +154,7 @@ MeshBuildResult build_mesh(const Soup& input, Mesh& mesh, bool weld_points) {
   MeshBuildResult r;
   const Weld weld = weld_points ? weld_identical_points(input.points) : Weld{identity(input.points.size()), 0};
   const Soup soup = weld.merged ? apply_weld(input, weld) : input;
+  r.welded = weld.merged;
   const Topology t = analyze_topology(soup);
   for (std::size_t f : t.repeated_index_faces) r.problems.push_back("face " + std::to_string(f) + " repeats a vertex");
   for (const Edge& e : t.nonmanifold_edges)

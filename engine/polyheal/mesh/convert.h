@@ -17,6 +17,7 @@ namespace polyheal {
 struct MeshBuildResult {
   bool ok = false;
   std::vector<std::string> problems;
+  std::size_t welded = 0;  // points welded to an identical earlier one
 };
 
 /// Welds identical points, then builds `mesh` (cleared first) when the soup is

@@ -23,7 +23,6 @@
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/mesh.h"
 #include "polyheal/mesh/vec3.h"
-#include "polyheal/mesh/weld.h"
 #include "polyheal/repair/detail/distance.h"
 
 namespace polyheal {
@@ -1010,7 +1009,7 @@ DeintersectResult remove_self_intersections(const Soup& input, const Deintersect
   mark_split_pinches(mesh);
   if (o.fixed_points) {
     // with no point welded, vertex i is point i (pinch copies, pinned, come after)
-    if (o.fixed_points->size() != input.points.size() || weld_identical_points(input.points).merged > 0)
+    if (o.fixed_points->size() != input.points.size() || built.welded > 0)
       throw UnsupportedInput("fixed points need the soup's points distinct (none welded)");
     auto pinned = mesh.add_property_map<vertex_descriptor, char>(kVertexPinned, 0).first;
     for (vertex_descriptor v : mesh.vertices())
