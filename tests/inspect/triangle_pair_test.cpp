@@ -155,6 +155,65 @@ TEST_CASE("triangle_pair: nearly and exactly coplanar fans of doubles are decide
   CHECK(intersecting[0][2] == 0);
 }
 
+TEST_CASE("triangle_pair: corners on parallel lines of doubles (a tube's flat sides and creases) are decided as CGAL's predicates decide them",
+          "[inspect]") {
+  // A grid extracted across a tube's oblique flat sides puts its points on
+  // vertical lines: any four on two lines are exactly coplanar though no
+  // difference of their coordinates shows it, and a corner on the line
+  // where two sides meet lies exactly in both sides' planes. CGAL's filters
+  // leave such pairs to exact arithmetic, so the certificate runs first;
+  // its answers must be CGAL's. Three lines at oblique positions (doubles),
+  // points at random heights; pairs from two lines (one side) or across
+  // the middle line (two sides), sharing 0, 1 or 2 corners.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), z(0.0, 4.0);
+  using P = InputKernel::Point_3;
+  using T = detail::Tri<InputKernel>;
+  std::size_t intersecting[2][3] = {{0, 0, 0}, {0, 0, 0}}, apart[2][3] = {{0, 0, 0}, {0, 0, 0}};
+  for (int trial = 0; trial < 6000; ++trial) {
+    const double x0 = u(rng), y0 = u(rng);
+    const double lines[3][2] = {{x0, y0}, {x0 + 1.3 + 0.1 * u(rng), y0 + 0.7 + 0.1 * u(rng)},
+                                {x0 + 1.9 + 0.1 * u(rng), y0 + 2.1 + 0.1 * u(rng)}};
+    const bool crease = trial % 2 == 1;
+    const int shared = (trial / 2) % 3;
+    auto on = [&](int line) { return P(lines[line][0], lines[line][1], z(rng)); };
+    // a on lines 0 and 1; b on 0 and 1 (one side) or 1 and 2 (across the crease)
+    const int b_lines[2] = {crease ? 1 : 0, crease ? 2 : 1};
+    std::array<P, 3> a{on(0), on(1), on(rng() % 2 ? 0 : 1)};
+    std::array<P, 3> b{on(b_lines[0]), on(b_lines[1]), on(b_lines[rng() % 2])};
+    std::array<std::uint64_t, 3> ib{4, 5, 6};
+    // shared corners: b's first `shared` corners are a's, on a line b uses
+    if (shared >= 1) {
+      if (crease) a[1] = b[0];  // a's corner on line 1
+      else b[0] = a[0];
+      ib[0] = crease ? 2 : 1;
+    }
+    if (shared == 2) {
+      if (crease) continue;  // an edge shared across the crease would need two points on line 1
+      b[1] = a[1];
+      ib[1] = 2;
+    }
+    const T x = detail::make_tri<InputKernel>(a[0], a[1], a[2], 1, 2, 3);
+    const T y = detail::make_tri<InputKernel>(b[0], b[1], b[2], ib[0], ib[1], ib[2]);
+    if (x.degenerate || y.degenerate) continue;
+    // truth() wants the shared corners first, in order
+    const T xs = shared == 1 && crease ? detail::make_tri<InputKernel>(a[1], a[2], a[0], 2, 3, 1) : x;
+    const bool want = truth(xs, y, shared);
+    INFO("trial " << trial << ", crease " << crease << ", shared " << shared);
+    CHECK(detail::faces_intersect<InputKernel>(x, y) == want);
+    CHECK(detail::faces_intersect<InputKernel>(y, x) == want);
+    ++(want ? intersecting : apart)[crease][shared];
+  }
+  // Both answers occur in every configuration; across the crease, faces
+  // share at most a corner.
+  for (int c = 0; c < 2; ++c)
+    for (int k = 0; k < (c ? 2 : 3); ++k) {
+      INFO("crease " << c << ", shared " << k);
+      CHECK(intersecting[c][k] > 10);
+      CHECK(apart[c][k] > 10);
+    }
+}
+
 TEST_CASE("triangle_pair: needles of one fan whose sides from the apex run along one line", "[inspect]") {
   // Where a side of each needle leaves the shared apex v along the same
   // line, no plane through v has the two strictly apart: the separation

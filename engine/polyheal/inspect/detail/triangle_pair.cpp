@@ -222,30 +222,62 @@ class Separation {
   DV normal_;
 };
 
-/// Normals (in doubles) less than about 1e-10 radians apart, b's corners
-/// within about 1e-13 of the pair's extent off a's plane, and one of them
-/// off it in doubles: a measurement that only picks which test runs first.
-/// Pairs merely parallel, or crossing, are left to CGAL's filters, which
-/// decide them at once; so are pairs exactly coplanar in doubles, which its
-/// interval filter decides where their arithmetic is exact (cycloidal's
-/// 179k such pairs cost 20% more through the certificate first).
-template <class K>
-bool nearly_coplanar(const Tri<K>& a, const Tri<K>& b) {
-  auto at = [](const typename K::Point_3& p) { return Point3d{p.x(), p.y(), p.z()}; };
-  const Point3d o = at(a.p[0]), u = sub(at(a.p[1]), o), v = sub(at(a.p[2]), o);
-  const std::array<Point3d, 3> d{sub(at(b.p[0]), o), sub(at(b.p[1]), o), sub(at(b.p[2]), o)};  // b from a's corner
-  const Point3d n = cross(u, v), m = cross(sub(d[1], d[0]), sub(d[2], d[0]));
-  const double nn = dot(n, n), mm = dot(m, m);
-  if (!(squared_norm(cross(n, m)) <= 1e-20 * nn * mm)) return false;
-  double l2 = std::max(dot(u, u), dot(v, v));
-  for (const Point3d& e : d) l2 = std::max(l2, dot(e, e));
-  bool off = false;
-  for (const Point3d& e : d) {
-    const double h = dot(n, e);
-    if (!(h * h <= 1e-26 * nn * l2)) return false;
-    off = off || h != 0;
+/// CGAL's static filter for orientation(p, q, r, s) on doubles
+/// (Static_filters/Orientation_3.h, its steps and bound): 1 or -1 when it
+/// decides a sign, 0 when it decides ZERO (all four points in one
+/// coordinate plane), 2 when it leaves the sign to the slower filters.
+inline int static_orientation(const Point3d& p, const Point3d& q, const Point3d& r, const Point3d& s) {
+  const double pqx = q[0] - p[0], pqy = q[1] - p[1], pqz = q[2] - p[2];
+  const double prx = r[0] - p[0], pry = r[1] - p[1], prz = r[2] - p[2];
+  const double psx = s[0] - p[0], psy = s[1] - p[1], psz = s[2] - p[2];
+  double maxx = std::max({std::abs(pqx), std::abs(prx), std::abs(psx)});
+  double maxy = std::max({std::abs(pqy), std::abs(pry), std::abs(psy)});
+  double maxz = std::max({std::abs(pqz), std::abs(prz), std::abs(psz)});
+  const double det = CGAL::determinant(pqx, pqy, pqz, prx, pry, prz, psx, psy, psz);
+  const double eps = 5.1107127829973299e-15 * maxx * maxy * maxz;
+  if (maxx > maxz) std::swap(maxx, maxz);
+  if (maxy > maxz) std::swap(maxy, maxz);
+  else if (maxy < maxx) std::swap(maxx, maxy);
+  if (maxx < 1e-97) return maxx == 0 ? 0 : 2;
+  if (maxz < 1e102) {
+    if (det > eps) return 1;
+    if (det < -eps) return -1;
   }
-  return off;
+  return 2;
+}
+
+/// What CGAL's static filter says of each triangle's corners (other than
+/// shared ones) against the other's plane, the first step of CGAL's own
+/// test. `apart`: all of one triangle's strictly on one side, so the faces
+/// meet at most in their shared corners (exact: the filter certifies the
+/// signs). `uncertain`: the filter leaves a sign to slower arithmetic, as
+/// where a corner lies on or next to the other plane and the interval
+/// filter fails too unless its arithmetic happens to be exact: neighbours
+/// in a planar region whose rounded vertices lie just off their plane;
+/// and, exactly, points on two parallel lines (a flat side of a tube
+/// extracted from vertical grid lines: four such points are coplanar,
+/// though no difference of their coordinates says so), or a corner on the
+/// line where two such sides meet. `decided`: every sign decided (corners
+/// in one coordinate plane are decided ZERO), CGAL's test goes fast.
+enum class Sides { apart, uncertain, decided };
+
+inline Sides static_sides(const Tri<InputKernel>& a, const Tri<InputKernel>& b) {
+  auto at = [](const InputKernel::Point_3& p) { return Point3d{p.x(), p.y(), p.z()}; };
+  const std::array<Point3d, 3> pa{at(a.p[0]), at(a.p[1]), at(a.p[2])}, pb{at(b.p[0]), at(b.p[1]), at(b.p[2])};
+  bool uncertain = false;
+  auto apart = [&](const Tri<InputKernel>& t, const std::array<Point3d, 3>& pt, const Tri<InputKernel>& o,
+                   const std::array<Point3d, 3>& po) {
+    int side = 0;  // +-1 while every corner asked is strictly on that side, 0 before, 3 otherwise
+    for (int j = 0; j < 3; ++j) {
+      if (o.id[j] == t.id[0] || o.id[j] == t.id[1] || o.id[j] == t.id[2]) continue;  // a shared corner
+      const int s = static_orientation(pt[0], pt[1], pt[2], po[std::size_t(j)]);
+      if (s == 2) uncertain = true;
+      side = (s == 1 || s == -1) && (side == 0 || side == s) ? s : 3;
+    }
+    return side == 1 || side == -1;
+  };
+  if (apart(a, pa, b, pb) || apart(b, pb, a, pa)) return Sides::apart;
+  return uncertain ? Sides::uncertain : Sides::decided;
 }
 
 }  // namespace
@@ -266,11 +298,15 @@ bool faces_intersect(const Tri<K>& a, const Tri<K>& b) {
     return primitives_intersect<K>(primitive(a), primitive(b));
   }
   // On doubles, CGAL's static filters decide most pairs at once; they fail
-  // (and throw to the exact fallback, Mpzf) on pairs nearly coplanar, such
-  // as neighbours in a planar region whose rounded vertices lie just off
-  // their plane. Only those are given the certificate first.
+  // (and throw to the exact fallback, Mpzf) where a corner lies on or next
+  // to the other triangle's plane. Only those are given the certificate
+  // first; pairs the filter shows apart are answered at once.
   bool certify_first = true;
-  if constexpr (std::is_same_v<K, InputKernel>) certify_first = nearly_coplanar(a, b);
+  if constexpr (std::is_same_v<K, InputKernel>) {
+    const Sides sides = static_sides(a, b);
+    if (sides == Sides::apart) return false;
+    certify_first = sides == Sides::uncertain;
+  }
   if (shared < 3 && certify_first) {
     CGAL::Protect_FPU_rounding<true> upward;  // the intervals' arithmetic
     if (Separation(a, b).apart(shared, ia, ib)) return false;
