@@ -138,3 +138,49 @@ TEST_CASE("predicates: normals_agree equals the exact sign of the normals' dot p
   CHECK(positive > 300);
   CHECK(other > 300);
 }
+
+TEST_CASE("predicates: is_nearly_on_segment equals exact rational evaluation, at its tolerance and off the ends",
+          "[inspect]") {
+  // Points at a random fraction 0.5-2 of eps |ab| from the line, in a random
+  // direction across it, their projection before, on or beyond the
+  // segment; segments steep in every axis and along one (where the box of
+  // the segment is thin). The answer must be the exact one: within
+  // eps |ab| of the line, not on it, projected strictly between a and b.
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> u(-1, 1), frac(0.5, 2.0), along(-0.2, 1.2);
+  const double eps = 1e-8;
+  int yes = 0, no_far = 0, no_beyond = 0;
+  for (int i = 0; i < 20000; ++i) {
+    Point3d a{u(rng), u(rng), u(rng)}, b{u(rng), u(rng), u(rng)};
+    if (i % 2) b = {a[0] + u(rng), a[1], a[2]};  // along x
+    Point3d ab{b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double l = std::sqrt(ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2]);
+    if (l < 1e-3) continue;
+    Point3d w{u(rng), u(rng), u(rng)};  // a direction across ab
+    const double wa = (w[0] * ab[0] + w[1] * ab[1] + w[2] * ab[2]) / (l * l);
+    for (int k = 0; k < 3; ++k) w[k] -= wa * ab[k];
+    const double wl = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    const double t = along(rng), d = frac(rng) * eps * l;
+    Point3d p;
+    for (int k = 0; k < 3; ++k) p[k] = a[k] + t * ab[k] + d * w[k] / wl;
+    // exact: 0 < ap.ab < ab.ab, |ap x ab|^2 <= eps^2 |ab|^4, ap x ab != 0
+    Q qab[3], qap[3];
+    for (int k = 0; k < 3; ++k) {
+      qab[k] = Q(b[k]) - Q(a[k]);
+      qap[k] = Q(p[k]) - Q(a[k]);
+    }
+    const Q dot_ = qap[0] * qab[0] + qap[1] * qab[1] + qap[2] * qab[2];
+    const Q l2 = qab[0] * qab[0] + qab[1] * qab[1] + qab[2] * qab[2];
+    const Q n[3] = {qap[1] * qab[2] - qap[2] * qab[1], qap[2] * qab[0] - qap[0] * qab[2],
+                    qap[0] * qab[1] - qap[1] * qab[0]};
+    const Q nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    const bool inside = dot_ > 0 && dot_ < l2;
+    const bool want = inside && nn > 0 && nn <= Q(eps) * Q(eps) * l2 * l2;
+    INFO("case " << i);
+    CHECK(is_nearly_on_segment(p, a, b, eps) == want);
+    ++(want ? yes : (inside ? no_far : no_beyond));
+  }
+  CHECK(yes > 1000);
+  CHECK(no_far > 1000);
+  CHECK(no_beyond > 1000);
+}

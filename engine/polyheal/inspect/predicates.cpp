@@ -258,6 +258,15 @@ bool fold_angle_less(const Point3d& p, const Point3d& q, const Point3d& r, const
 }
 
 bool is_nearly_on_segment(const Point3d& p, const Point3d& a, const Point3d& b, double eps) {
+  // Outside the segment's box grown by eps |ab| in some coordinate: farther
+  // than that from every point of it. |ab| <= sqrt(3) max_k |b_k - a_k|;
+  // the factor 2.5 covers that and the rounding of these few operations.
+  // (Most vertices asked about an edge are its neighbours, nowhere near it.)
+  double m = 0;
+  for (int k = 0; k < 3; ++k) m = std::max(m, std::abs(b[k] - a[k]));
+  const double reach = 2.5 * eps * m;
+  for (int k = 0; k < 3; ++k)
+    if (p[k] - std::max(a[k], b[k]) > reach || std::min(a[k], b[k]) - p[k] > reach) return false;
   if (is_collinear(a, b, p)) return false;  // exactly on the line: an exact defect, not a tolerance one
   return filtered([&](auto nt) {
     using NT = decltype(nt);
