@@ -209,9 +209,13 @@ struct LocalIndex::Impl {
 
   static Prepared prepare(const Point& a, const Point& b, const Point& c, std::uint64_t ia, std::uint64_t ib,
                           std::uint64_t ic) {
-    Prepared t{detail::make_tri<Kernel>(a, b, c, ia, ib, ic), false, {}};
-    t.doubles = is_double_point(a) && is_double_point(b) && is_double_point(c);
-    if (t.doubles) t.input = {{to_input_point(a), to_input_point(b), to_input_point(c)}, t.exact.id, t.exact.degenerate};
+    if (!(is_double_point(a) && is_double_point(b) && is_double_point(c)))
+      return {detail::make_tri<Kernel>(a, b, c, ia, ib, ic), false, {}};
+    // Degeneracy decided once, on the doubles (the same points, the same
+    // exact answer as on the lazy ones, without their filter's overhead).
+    Prepared t{{{a, b, c}, {ia, ib, ic}, false}, true,
+               detail::make_tri<InputKernel>(to_input_point(a), to_input_point(b), to_input_point(c), ia, ib, ic)};
+    t.exact.degenerate = t.input.degenerate;
     return t;
   }
 

@@ -1951,7 +1951,8 @@ class BoundedDecimation {
   /// across their edge (TetGen refuses such "nearly self-intersecting"
   /// facets; keep_clean_regions holds its strips to the same bound).
   static bool folded(const Point3d& n, const Point3d& m) {
-    return dot(n, m) < std::cos(179 * M_PI / 180) * std::sqrt(dot(n, n) * dot(m, m));
+    static const double cos_fold = std::cos(179 * M_PI / 180);  // not folded at compile time (-frounding-math)
+    return dot(n, m) < cos_fold * std::sqrt(dot(n, n) * dot(m, m));
   }
   /// The normal of the face across halfedge h (zero on a border).
   Point3d normal_across(halfedge_descriptor h) const {
@@ -1970,7 +1971,8 @@ class BoundedDecimation {
 
   bool try_collapse(vertex_descriptor v, double limit) {
     if (kept_.frozen(at(v))) return false;
-    std::vector<face_descriptor> star;
+    std::vector<face_descriptor>& star = star_;  // scratch buffers, reused: most calls make no collapse
+    star.clear();
     double carried = 0, old_quality = HUGE_VAL;
     for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
       const face_descriptor f = mesh_.face(g);
@@ -1979,12 +1981,14 @@ class BoundedDecimation {
       old_quality = std::min(old_quality, min_angle_quality(at(mesh_.source(g)), at(v), at(mesh_.target(mesh_.next(g)))));
     }
     if (carried >= limit) return false;
-    std::vector<Candidate> candidates;
+    std::size_t candidates = 0;
     for (halfedge_descriptor h : CGAL::halfedges_around_source(v, mesh_)) {
       const vertex_descriptor u = mesh_.target(h);
       if (star.size() + mesh_.degree(u) > kMaxValence + 4) continue;
-      Candidate c;
+      if (candidates_.size() == candidates) candidates_.emplace_back();
+      Candidate& c = candidates_[candidates];
       c.h = h;
+      c.proposed.clear();
       c.quality = HUGE_VAL;
       double d2 = HUGE_VAL;
       bool ok = true;
@@ -1993,9 +1997,12 @@ class BoundedDecimation {
       // round v, neither removed); and the faces beyond the two removed
       // (across their edges at u) against the fan faces that inherit those
       // edges, at the vertex x.
-      std::vector<std::pair<vertex_descriptor, Point3d>> beyond;
-      std::vector<Point3d> ring;   // new normals round v (zero for the removed faces)
-      std::vector<char> removed;
+      std::vector<std::pair<vertex_descriptor, Point3d>>& beyond = beyond_;
+      std::vector<Point3d>& ring = ring_;  // new normals round v (zero for the removed faces)
+      std::vector<char>& removed = removed_;
+      beyond.clear();
+      ring.clear();
+      removed.clear();
       for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
         const vertex_descriptor a = mesh_.source(g), b = mesh_.target(mesh_.next(g));
         if (a == u || b == u) {  // one of the two faces the collapse removes
@@ -2007,7 +2014,7 @@ class BoundedDecimation {
         const Point3d &pa = at(a), &pu = at(u), &pb = at(b);
         const Point3d n_old = normal(pa, at(v), pb), n_new = normal(pa, pu, pb);
         if (dot(n_old, n_new) <= 0.5 * std::sqrt(dot(n_old, n_old) * dot(n_new, n_new)) ||
-            CGAL::collinear(mesh_.point(a), mesh_.point(u), mesh_.point(b)) ||
+            CGAL::collinear(ipoint(pa), ipoint(pu), ipoint(pb)) ||  // the mesh's points are these doubles
             folded(n_new, normal_across(mesh_.next(mesh_.next(g))))) {
           ok = false;
           break;
@@ -2036,11 +2043,12 @@ class BoundedDecimation {
       // Never make the worst triangle much worse than the star's (needles
       // are what TetGen and users stumble on).
       if (c.error > limit || c.quality < std::min(old_quality, 0.004)) continue;
-      candidates.push_back(std::move(c));
+      ++candidates;
     }
-    std::sort(candidates.begin(), candidates.end(),
+    std::sort(candidates_.begin(), candidates_.begin() + std::ptrdiff_t(candidates),
               [](const Candidate& a, const Candidate& b) { return a.quality > b.quality; });
-    for (const Candidate& c : candidates) {
+    for (std::size_t k = 0; k < candidates; ++k) {
+      const Candidate& c = candidates_[k];
       if (!CGAL::Euler::does_satisfy_link_condition(mesh_.edge(c.h), mesh_)) continue;
       if (!near_reference(c, limit)) continue;
       if (index_.would_intersect(c.proposed, star)) continue;
@@ -2161,6 +2169,12 @@ class BoundedDecimation {
   Mesh::Property_map<face_descriptor, double> error_;
   std::vector<Point3d> at_;
   double diagonal_ = 0;  // of the points' bounding box: bounds every edge
+  // try_collapse's scratch buffers
+  std::vector<face_descriptor> star_;
+  std::vector<Candidate> candidates_;
+  std::vector<std::pair<vertex_descriptor, Point3d>> beyond_;
+  std::vector<Point3d> ring_;
+  std::vector<char> removed_;
 };
 
 // ---------------------------------------------------------------------------
