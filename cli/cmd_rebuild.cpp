@@ -80,7 +80,6 @@ nlohmann::json to_json(const RebuildArgs& a, const RebuildReport& r, double read
         {"planar_collapses", r.collapses},
         {"coarsening_retries", r.coarsening_retries},
         {"decimated", r.decimated},
-        {"decimation_slabs", r.decimation_slabs},
         {"sharpened", r.sharpened},
         {"faces", r.faces_out},
         {"vertices", r.vertices_out},
@@ -182,11 +181,10 @@ void print_text(const RebuildArgs& a, const RebuildReport& r) {
       std::printf("  clean regions: %zu input faces kept exactly, in %zu patches zipped to the grid surface; %zu "
                   "patches given up (grid surface there)\n",
                   r.kept_faces, r.kept_patches, r.patches_given_up);
-    std::printf("  output: %zu faces extracted, %zu planar vertices collapsed, %zu decimated%s -> %zu faces, %zu "
+    std::printf("  output: %zu faces extracted, %zu planar vertices collapsed, %zu decimated -> %zu faces, %zu "
                 "vertices, %zu components, %zu face groups\n",
-                r.extracted_faces, r.collapses, r.decimated,
-                r.decimation_slabs > 0 ? (" (on " + std::to_string(r.decimation_slabs) + " slabs in parallel)").c_str() : "",
-                r.faces_out, r.vertices_out, r.components_out, r.face_groups);
+                r.extracted_faces, r.collapses, r.decimated, r.faces_out, r.vertices_out, r.components_out,
+                r.face_groups);
   }
   std::printf("  time: prepare %.3f s, octree %.3f s, winding %.3f s, extract %.3f s, refine %.3f s, simplify %.3f s, "
               "certify %.3f s\n",

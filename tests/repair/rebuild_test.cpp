@@ -9,8 +9,6 @@
 #include <cmath>
 #include <set>
 
-#include <tbb/global_control.h>
-
 #include "polyheal/inspect/report.h"
 #include "polyheal/io/read.h"
 #include "polyheal/io/write.h"
@@ -751,30 +749,4 @@ TEST_CASE("loss measure: on a certified surface the pseudo-normal inside test ag
     CHECK(fast.absorbed == slow.absorbed);
     CHECK(std::abs(fast.outside_distance - slow.outside_distance) <= 0.05 * far);
   }
-}
-
-TEST_CASE("rebuild: a large surface is decimated on slabs in parallel, the same on one thread", "[rebuild]") {
-  // The quads' shell extracts some 71k faces: decimated on slabs across the
-  // longest axis, each on its own copy, in parallel, then the vertices
-  // straddling the cuts. The slabs depend on the surface only: one thread
-  // gives the same file. The result is certified, and the input (a sheet,
-  // wrapped in a shell 0.9 cell from it) within that plus the decimation's
-  // tolerance (a quarter cell) of it.
-  const Soup in = read_soup(test::fixture("corpus/cgal__quads_to_stitch.off"));
-  const RebuildResult result = rebuild(in);
-  const RebuildReport& r = result.report;
-  REQUIRE(r.extracted_faces >= 40000);
-  CHECK(r.decimation_slabs >= 2);
-  CHECK(r.decimated > r.extracted_faces / 4);
-  const Soup out = written(result, "rebuild_slabs.off");
-  check_solid(in, out, r, 1, 2);
-  CHECK(r.input_to_output <= (0.9 + 0.25) * r.cell);
-  RebuildResult one;
-  {
-    tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
-    one = rebuild(in);
-  }
-  CHECK(one.report.decimation_slabs == r.decimation_slabs);
-  CHECK(one.soup.points == result.soup.points);
-  CHECK(one.soup.indices == result.soup.indices);
 }

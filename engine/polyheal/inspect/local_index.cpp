@@ -307,8 +307,6 @@ void LocalIndex::update(const std::vector<face_descriptor>& faces) {
 
 void LocalIndex::remove(face_descriptor f) { impl_->erase(static_cast<std::uint32_t>(f)); }
 
-void LocalIndex::rebalance() { impl_->rebuild(); }
-
 std::vector<std::pair<face_descriptor, face_descriptor>> LocalIndex::intersections(
     const std::vector<face_descriptor>& faces) const {
   std::vector<std::pair<face_descriptor, face_descriptor>> out;

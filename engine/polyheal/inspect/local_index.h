@@ -39,10 +39,6 @@ class LocalIndex {
   void update(const std::vector<face_descriptor>& faces);
   /// Drops a face from the index (call before removing it from the mesh).
   void remove(face_descriptor f);
-  /// Builds the hierarchy again, balanced, over the faces indexed now (after
-  /// many edits: re-inserted leaves go where their boxes grow the tree
-  /// least, and queries get deeper).
-  void rebalance();
 
   /// Every pair (f, g) with f in `faces` and g any indexed face such that f
   /// and g intersect now; a pair with both faces in `faces` appears once.

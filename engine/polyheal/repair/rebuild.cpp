@@ -18,7 +18,6 @@
 #include <mutex>
 #include <numeric>
 #include <optional>
-#include <stdexcept>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -1706,8 +1705,7 @@ class PlanarCoarsening {
 //   - no new triangle intersects another face (the oracle's local query,
 //     exact).
 // Sweeps with growing thresholds (a quarter, half, all of the tolerance)
-// take the cheapest collapses first; on a large surface each threshold's
-// sweeps run on slabs of it in parallel (BoundedDecimation::run).
+// take the cheapest collapses first.
 
 /// The extracted surface for "is x within r of it?" (r about the cell the
 /// grid was built with, or less): its triangles hashed into a uniform grid,
@@ -1827,8 +1825,15 @@ class BoundedDecimation {
   /// `reference`: the extracted surface the result must stay near; `cell`:
   /// the grid's cell (its triangles' size).
   BoundedDecimation(Mesh& mesh, const Soup& reference, double tolerance, double cell, const KeptRegions& kept)
-      : BoundedDecimation(mesh, std::make_shared<const TriangleGrid>(reference, std::max(cell, tolerance)),
-                          tolerance, kept) {}
+      : mesh_(mesh), index_(mesh), reference_(reference, std::max(cell, tolerance)), tolerance_(tolerance),
+        kept_(kept) {
+    error_ = mesh_.add_property_map<face_descriptor, double>("f:rebuild_error", 0.0).first;
+    for (vertex_descriptor v : mesh_.vertices()) at_.push_back(nearest_point3d(mesh_.point(v)));
+    moved_.assign(at_.size(), 0);
+    Region all;
+    for (const Point3d& p : at_) grow(all, p, all.count++ == 0);
+    diagonal_ = at_.empty() ? 0 : dist(all.lo, all.hi);
+  }
 
   /// §5, Fig. 15 (crisper edges from the facets' normals): a vertex whose
   /// neighbourhood lies on facets of two planes meeting at more than the
@@ -1923,194 +1928,24 @@ class BoundedDecimation {
     return moved;
   }
 
-  /// The collapses, in parallel where the surface is large: it is cut
-  /// into slabs across its longest axis, at the vertices' quantiles (so the
-  /// result does not depend on the number of threads), and each slab is
-  /// decimated on its own copy of the faces that meet it. A collapse there
-  /// is made only if v and its whole ring lie strictly inside the slab: the
-  /// faces it changes lie in the slab's open interior (convex hulls of
-  /// points inside), so slabs never change the same face, never make faces
-  /// that meet another slab's new faces, and each copy holds every face its
-  /// new faces could meet (the faces that meet the open slab; a face
-  /// crossing the slab with no corner in it too). Each slab's collapses are
-  /// then made again on the whole mesh, in slab order (the same edges, the
-  /// same result: no face of one slab's stars is in another's), and the
-  /// vertices whose stars straddle a cut are given their turn last.
   std::size_t run() {
-    const std::size_t slabs = std::min(kMaxSlabs, mesh_.number_of_faces() / kFacesPerSlab);
-    if (slabs >= 2) cut_into_slabs(slabs);
-    slabs_ = slabs >= 2 ? slabs : 0;
     std::size_t collapses = 0;
     for (double fraction : {0.25, 0.5, 1.0}) {
       const double limit = fraction * tolerance_;
-      bool failed = slabs_ == 0 || whole_;
-      if (!failed) {
-        std::vector<std::vector<Collapse>> made(slabs);
-        std::atomic<bool> any_failed{false};
-        tbb::parallel_for(std::size_t(0), slabs, [&](std::size_t i) {
-          if (!decimate_slab(std::int32_t(i), limit, made[i])) any_failed = true;
-        });
-        failed = any_failed;
-        whole_ = failed;  // a copy could not be built: the whole surface from here on
-        if (!failed) {
-          std::vector<vertex_descriptor> now(mesh_.number_of_vertices() + mesh_.number_of_removed_vertices());
-          for (vertex_descriptor v : mesh_.vertices()) now[v] = v;
-          for (const std::vector<Collapse>& list : made)
-            for (const Collapse& c : list) {
-              const auto [h, found] = CGAL::halfedge(now[c.v], now[c.u], mesh_);
-              if (!found) throw std::logic_error("rebuild: a slab's collapse has no edge in the whole mesh");
-              now[c.u] = apply(h, c.error);  // h: v -> u
-              ++collapses;
-            }
-          index_.rebalance();
-        }
+      for (std::size_t sweep = 0; sweep < 2; ++sweep) {
+        std::size_t made = 0;
+        std::vector<vertex_descriptor> all(mesh_.vertices().begin(), mesh_.vertices().end());
+        for (vertex_descriptor v : all)
+          if (!mesh_.is_removed(v) && try_collapse(v, limit)) ++made;
+        collapses += made;
+        if (made == 0) break;
       }
-      // Vertices whose star straddles a cut (all of them if a slab's copy
-      // could not be built: then nothing was collapsed yet).
-      collapses += sweeps(limit, [&](vertex_descriptor v) { return failed || !inside_one_slab(v); });
     }
     return collapses;
   }
-
-  /// The slabs run() decimated in parallel (0: the whole surface at once;
-  /// a slab whose copy cannot be built sends every sweep after to the whole).
-  std::size_t slabs() const { return slabs_; }
 
  private:
   static constexpr std::size_t kMaxValence = 24;
-  static constexpr std::size_t kFacesPerSlab = 20000, kMaxSlabs = 4;
-
-  /// A collapse v -> u, by vertex of the whole mesh.
-  struct Collapse {
-    vertex_descriptor v, u;
-    double error;
-  };
-
-  BoundedDecimation(Mesh& mesh, std::shared_ptr<const TriangleGrid> reference, double tolerance,
-                    const KeptRegions& kept)
-      : mesh_(mesh), index_(mesh), reference_(std::move(reference)), tolerance_(tolerance), kept_(kept) {
-    error_ = mesh_.add_property_map<face_descriptor, double>("f:rebuild_error", 0.0).first;
-    for (vertex_descriptor v : mesh_.vertices()) at_.push_back(nearest_point3d(mesh_.point(v)));
-    moved_.assign(at_.size(), 0);
-    Region all;
-    for (const Point3d& p : at_) grow(all, p, all.count++ == 0);
-    diagonal_ = at_.empty() ? 0 : dist(all.lo, all.hi);
-  }
-
-  /// Two sweeps (the second only if the first collapsed any) over the
-  /// vertices `eligible`, at error bound `limit`.
-  template <class Eligible>
-  std::size_t sweeps(double limit, Eligible eligible) {
-    std::size_t collapses = 0;
-    for (std::size_t sweep = 0; sweep < 2; ++sweep) {
-      std::size_t made = 0;
-      std::vector<vertex_descriptor> all(mesh_.vertices().begin(), mesh_.vertices().end());
-      for (vertex_descriptor v : all)
-        if (!mesh_.is_removed(v) && eligible(v) && try_collapse(v, limit)) ++made;
-      collapses += made;
-      if (made == 0) break;
-    }
-    return collapses;
-  }
-
-  /// Cuts at the vertices' quantiles along the bounding box's longest axis;
-  /// slab_[v]: the open slab holding v, -1 on a cut.
-  void cut_into_slabs(std::size_t slabs) {
-    Region all;
-    for (vertex_descriptor v : mesh_.vertices()) grow(all, at(v), all.count++ == 0);
-    axis_ = 0;
-    for (int d = 1; d < 3; ++d)
-      if (all.hi[d] - all.lo[d] > all.hi[axis_] - all.lo[axis_]) axis_ = d;
-    std::vector<double> x;
-    for (vertex_descriptor v : mesh_.vertices()) x.push_back(at(v)[axis_]);
-    std::sort(x.begin(), x.end());
-    cuts_.clear();
-    for (std::size_t i = 1; i < slabs; ++i) cuts_.push_back(x[i * x.size() / slabs]);
-    slab_.assign(at_.size(), -1);
-    for (vertex_descriptor v : mesh_.vertices()) slab_[v] = slab_of(at(v)[axis_]);
-  }
-  std::int32_t slab_of(double x) const {
-    const auto it = std::lower_bound(cuts_.begin(), cuts_.end(), x);
-    if (it != cuts_.end() && *it == x) return -1;
-    return std::int32_t(it - cuts_.begin());
-  }
-  bool inside_one_slab(vertex_descriptor v) const {
-    const std::int32_t s = slab_[v];
-    if (s < 0) return false;
-    for (vertex_descriptor u : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_))
-      if (slab_[u] != s) return false;
-    return true;
-  }
-
-  /// Decimates slab i on a copy of the faces meeting it (see run()); its
-  /// collapses, by vertex of the whole mesh, go to `made`. False when the
-  /// copy cannot be built.
-  bool decimate_slab(std::int32_t i, double limit, std::vector<Collapse>& made) const {
-    const double lo = i == 0 ? -HUGE_VAL : cuts_[std::size_t(i) - 1];
-    const double hi = std::size_t(i) == cuts_.size() ? HUGE_VAL : cuts_[std::size_t(i)];
-    Mesh copy;
-    std::vector<vertex_descriptor> copy_of(at_.size());
-    std::vector<vertex_descriptor> origin;
-    std::vector<char> added(at_.size(), 0);
-    for (face_descriptor f : mesh_.faces()) {
-      std::array<vertex_descriptor, 3> t;
-      double a = HUGE_VAL, b = -HUGE_VAL;
-      int k = 0;
-      for (vertex_descriptor v : CGAL::vertices_around_face(mesh_.halfedge(f), mesh_)) {
-        t[std::size_t(k++)] = v;
-        a = std::min(a, at(v)[axis_]);
-        b = std::max(b, at(v)[axis_]);
-      }
-      if (!(a < hi && b > lo)) continue;
-      for (vertex_descriptor v : t)
-        if (!added[v]) {
-          added[v] = 1;
-          const Point3d& p = at(v);
-          copy_of[v] = copy.add_vertex(Point(p[0], p[1], p[2]));  // its own lazy leaves: no sharing across threads
-          origin.push_back(v);
-        }
-      if (copy.add_face(copy_of[t[0]], copy_of[t[1]], copy_of[t[2]]) == Mesh::null_face()) return false;
-    }
-    BoundedDecimation slab(copy, reference_, tolerance_, kept_);
-    for (std::size_t k = 0; k < origin.size(); ++k) {
-      slab.moved_[k] = moved_[origin[k]];
-      slab.slab_.push_back(slab_[origin[k]]);
-    }
-    for (face_descriptor f : copy.faces()) {
-      const auto h = copy.halfedge(f);
-      // error carried by the face: the whole mesh's (faces are matched by a halfedge's vertices)
-      const auto [g, found] =
-          CGAL::halfedge(origin[copy.source(h)], origin[copy.target(h)], mesh_);
-      slab.error_[f] = found && !mesh_.is_border(g) ? error_[mesh_.face(g)] : 0.0;
-    }
-    slab.origin_ = &origin;
-    slab.made_ = &made;
-    slab.sweeps(limit, [&](vertex_descriptor v) { return slab.slab_[v] == i && slab.inside_one_slab(v); });
-    return true;
-  }
-
-  /// Makes the collapse of halfedge h (v -> u) carrying `error`; the vertex
-  /// kept (at u's position).
-  vertex_descriptor apply(halfedge_descriptor h, double error) {
-    const vertex_descriptor u = mesh_.target(h);
-    const Point keep = mesh_.point(u);
-    const Point3d keep_at = at(u);
-    // the two faces on the collapsed edge go; the others keep their leaves
-    for (halfedge_descriptor g : {h, mesh_.opposite(h)})
-      if (!mesh_.is_border(g)) index_.remove(mesh_.face(g));
-    const vertex_descriptor kept = CGAL::Euler::collapse_edge(mesh_.edge(h), mesh_);
-    mesh_.point(kept) = keep;
-    at_[static_cast<std::size_t>(kept)] = keep_at;
-    if (!slab_.empty()) slab_[kept] = slab_[u];
-    if (origin_) (*origin_)[kept] = (*origin_)[u];
-    std::vector<face_descriptor> changed;
-    for (face_descriptor f : CGAL::faces_around_target(mesh_.halfedge(kept), mesh_)) {
-      changed.push_back(f);
-      error_[f] = std::max(error_[f], error);
-    }
-    index_.update(changed);
-    return kept;
-  }
 
   /// Normals more than 179 degrees apart: the faces fold onto each other
   /// across their edge (TetGen refuses such "nearly self-intersecting"
@@ -2302,19 +2137,32 @@ class BoundedDecimation {
                                   {(q[0] + w[0]) / 2, (q[1] + w[1]) / 2, (q[2] + w[2]) / 2},
                                   {(w[0] + p[0]) / 2, (w[1] + p[1]) / 2, (w[2] + p[2]) / 2}};
       for (const Point3d& x : samples)
-        if (!reference_->within(x, limit)) return false;
+        if (!reference_.within(x, limit)) return false;
     }
     return true;
   }
 
   void apply(const Candidate& c) {
-    if (made_) made_->push_back({(*origin_)[mesh_.source(c.h)], (*origin_)[mesh_.target(c.h)], c.error});
-    apply(c.h, c.error);
+    const vertex_descriptor u = mesh_.target(c.h);
+    const Point keep = mesh_.point(u);
+    const Point3d keep_at = at(u);
+    // the two faces on the collapsed edge go; the others keep their leaves
+    for (halfedge_descriptor h : {c.h, mesh_.opposite(c.h)})
+      if (!mesh_.is_border(h)) index_.remove(mesh_.face(h));
+    const vertex_descriptor kept = CGAL::Euler::collapse_edge(mesh_.edge(c.h), mesh_);
+    mesh_.point(kept) = keep;
+    at_[static_cast<std::size_t>(kept)] = keep_at;
+    std::vector<face_descriptor> changed;
+    for (face_descriptor f : CGAL::faces_around_target(mesh_.halfedge(kept), mesh_)) {
+      changed.push_back(f);
+      error_[f] = std::max(error_[f], c.error);
+    }
+    index_.update(changed);
   }
 
   Mesh& mesh_;
   LocalIndex index_;
-  std::shared_ptr<const TriangleGrid> reference_;
+  TriangleGrid reference_;
   double tolerance_;
   const KeptRegions& kept_;  // their points never move
   std::vector<char> moved_;  // per vertex: sharpened, so no longer on the extracted surface
@@ -2327,15 +2175,6 @@ class BoundedDecimation {
   std::vector<std::pair<vertex_descriptor, Point3d>> beyond_;
   std::vector<Point3d> ring_;
   std::vector<char> removed_;
-  // Slabs (run()): the axis, the cuts, each vertex's open slab (-1: on a cut).
-  std::size_t slabs_ = 0;
-  bool whole_ = false;
-  int axis_ = 0;
-  std::vector<double> cuts_;
-  std::vector<std::int32_t> slab_;
-  // A slab's copy: each vertex's vertex in the whole mesh, and the collapses made.
-  std::vector<vertex_descriptor>* origin_ = nullptr;
-  std::vector<Collapse>* made_ = nullptr;
 };
 
 // ---------------------------------------------------------------------------
@@ -3036,7 +2875,6 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
       r.sharpened =
           decimation.sharpen(f, input_surface, facet, 0.75 * r.cell, std::cos(options.feature_angle * M_PI / 180));
     r.decimated = decimation.run();
-    r.decimation_slabs = decimation.slabs();
     mesh.collect_garbage();
     // Collapses keep a vertex's facet with its point.
     facet_at.clear();

@@ -145,7 +145,6 @@ struct RebuildReport {
   std::size_t collapses = 0;            // planar vertices removed
   std::size_t coarsening_retries = 0;   // coarsenings found folded (exactly) and done again, more held back
   std::size_t decimated = 0;            // vertices removed by decimation
-  std::size_t decimation_slabs = 0;     // slabs decimated in parallel (0: the whole surface at once)
   std::size_t sharpened = 0;            // vertices moved onto sharp edges and corners
   std::size_t faces_out = 0, vertices_out = 0, components_out = 0, face_groups = 0;
   // certification (of the result as rounded to doubles)
