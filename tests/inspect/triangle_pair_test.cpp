@@ -115,11 +115,12 @@ TEST_CASE("triangle_pair: nearly coplanar rational fans are decided as CGAL's ex
 
 TEST_CASE("triangle_pair: nearly and exactly coplanar fans of doubles are decided as CGAL's predicates decide them",
           "[inspect]") {
-  // On doubles the certificate runs first only for pairs nearly but not
-  // exactly coplanar in doubles, such as a planar region's rounded points
-  // make: here the fans' corners rounded to doubles in an oblique plane
-  // (nearly coplanar, or lifted), and in a plane z = const (exactly
-  // coplanar: left to CGAL, whose interval filter decides such pairs).
+  // On doubles the certificate runs first only where CGAL's static filter
+  // leaves a corner's side of the other plane undecided, as a planar
+  // region's rounded points make: here the fans' corners rounded to doubles
+  // in an oblique plane (nearly coplanar, or lifted), and in a plane
+  // z = const (exactly coplanar, decided ZERO by the filter: left to CGAL,
+  // whose interval filter decides such pairs).
   std::mt19937 rng(11);
   const double heights[] = {0.0, 1e-12, 1e-3};
   auto to_input = [](const Point& p) { return InputKernel::Point_3(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())); };
