@@ -85,6 +85,14 @@ Point3d normal(const Point3d& a, const Point3d& b, const Point3d& c) {
 }
 
 /// 1 - cos of the triangle's smallest angle (larger is better; a measurement).
+/// cos 179 degrees: faces whose normals are further apart fold onto each
+/// other (TetGen refuses such "nearly self-intersecting" facets). Computed
+/// once: under -frounding-math the compiler does not fold std::cos.
+double cos_fold() {
+  static const double c = std::cos(179 * M_PI / 180);
+  return c;
+}
+
 double min_angle_quality(const Point3d& a, const Point3d& b, const Point3d& c) {
   const Point3d* p[3] = {&a, &b, &c};
   double worst = HUGE_VAL;
@@ -1421,7 +1429,6 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
             }
             return -1;
           };
-          const double cos_fold = std::cos(179 * M_PI / 180);
           auto unit_normal = [&](std::size_t t) {
             const Point3d n = normal(out_vertices[out_tris[t][0]].p, out_vertices[out_tris[t][1]].p,
                                      out_vertices[out_tris[t][2]].p);
@@ -1435,7 +1442,7 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
             const Point3d n = unit_normal(t);
             for (int k = 0; k < 3; ++k) {
               const std::int64_t o = face_of(out_tris[t][(k + 1) % 3], out_tris[t][k]);
-              if (o >= 0 && dot(n, unit_normal(std::size_t(o))) < cos_fold)
+              if (o >= 0 && dot(n, unit_normal(std::size_t(o))) < cos_fold())
                 bad.push_back({std::min(t, std::size_t(o)), std::max(t, std::size_t(o))});
             }
           }
@@ -1951,8 +1958,7 @@ class BoundedDecimation {
   /// across their edge (TetGen refuses such "nearly self-intersecting"
   /// facets; keep_clean_regions holds its strips to the same bound).
   static bool folded(const Point3d& n, const Point3d& m) {
-    static const double cos_fold = std::cos(179 * M_PI / 180);  // not folded at compile time (-frounding-math)
-    return dot(n, m) < cos_fold * std::sqrt(dot(n, n) * dot(m, m));
+    return dot(n, m) < cos_fold() * std::sqrt(dot(n, n) * dot(m, m));
   }
   /// The normal of the face across halfedge h (zero on a border).
   Point3d normal_across(halfedge_descriptor h) const {
