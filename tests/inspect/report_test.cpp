@@ -253,6 +253,48 @@ TEST_CASE("inspect: a vertex within TetGen's tolerance of an edge it is not on s
   }
 }
 
+TEST_CASE("inspect: a nearly flat quad whose flip TetGen makes would cut another face is reported, and stops TetGen",
+          "[inspect][tetgen]") {
+  // A pyramid whose top is two faces, (p, q, r) and (q, p, s), folded by
+  // atan(h): below 0.1 degrees TetGen (-p) merges them into one facet and
+  // flips pq to rs when s lies inside the circle through p, q, r (here r
+  // does: centre (2, 1.5), radius 2.5; s at 0.5 from it). The flipped
+  // diagonal rs rises to h / 2 above pq's midpoint; a small tetrahedron's
+  // bottom face slants from z = 1e-4 to 8e-4 just above it: clear of the
+  // pyramid, cut by the flipped surface.
+  struct Case {
+    const char* name;
+    double h;     // the fold: s = (2, -1, h)
+    double ry;    // r = (2, ry, 0)
+    double lift;  // added to the small tetrahedron's z
+    bool hazard;
+  };
+  int n = 0;
+  for (const Case& c : {Case{"flipped diagonal cuts a face", 1e-3, 1, 0, true},
+                        Case{"coplanar: the flip changes nothing", 0, 1, 0, false},
+                        Case{"Delaunay quad: TetGen keeps pq", 1e-3, 4.5, 0, false},
+                        Case{"the face clear of the flipped diagonal", 1e-3, 1, 1e-2, false}}) {
+    INFO(c.name);
+    const Soup pyramid = test::soup({{0, 0, 0}, {4, 0, 0}, {2, c.ry, 0}, {2, -1, c.h}, {2, 0, -1}},
+                                    {{0, 1, 2}, {1, 0, 3}, {2, 1, 4}, {0, 2, 4}, {3, 0, 4}, {1, 3, 4}});
+    const double z = c.lift;
+    const Soup small = test::soup({{1.9, -0.05, 1e-4 + z}, {2.1, -0.05, 1e-4 + z}, {2.0, 0.05, 8e-4 + z}, {2, 0, 0.5}},
+                                  {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}});
+    const Soup s = test::concat(pyramid, small);
+    InspectOptions io;
+    io.tetgen_segments = true;
+    const Report r = inspect(s, io);
+    REQUIRE(r.certified_clean());
+    REQUIRE(r.sharp_folds.empty());
+    CHECK(r.flip_hazards.size() == (c.hazard ? 1u : 0u));
+    if (c.hazard) CHECK(r.flip_hazards[0] == FacePair{0, 1});
+    CHECK(r.tetgen_ready() == !c.hazard);
+    const std::string name = "flip_" + std::to_string(++n) + ".off", path = test::scratch(name);
+    write_soup(s, path);
+    CHECK(test::tetgen_meshes(path, "tg_" + name, "-pQ") == !c.hazard);
+  }
+}
+
 TEST_CASE("inspect: the sign of the enclosed volume, exactly, for the whole surface and per component", "[inspect]") {
   const Report out = inspect(test::box({0, 0, 0}, {1, 1, 1}));
   CHECK(out.volume_sign == 1);

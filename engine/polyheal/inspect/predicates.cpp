@@ -257,6 +257,47 @@ bool fold_angle_less(const Point3d& p, const Point3d& q, const Point3d& r, const
   return less_from_signs(dot_sign, test_sign, cos_threshold);
 }
 
+namespace {
+
+/// |n|^2 >= 1e-6 l^4 for triangle abc's normal n and longest edge l (doubles:
+/// a gate on the conditioning, not a predicate on the surface).
+bool well_shaped_for_circumcircle(const Point3d& a, const Point3d& b, const Point3d& c) {
+  double u[3], v[3], w[3];
+  for (int i = 0; i < 3; ++i) {
+    u[i] = b[i] - a[i];
+    v[i] = c[i] - a[i];
+    w[i] = c[i] - b[i];
+  }
+  const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  const double l2 = std::max({u[0] * u[0] + u[1] * u[1] + u[2] * u[2], v[0] * v[0] + v[1] * v[1] + v[2] * v[2],
+                              w[0] * w[0] + w[1] * w[1] + w[2] * w[2]});
+  return n[0] * n[0] + n[1] * n[1] + n[2] * n[2] >= 1e-6 * l2 * l2;
+}
+
+/// x farther than k times the radius from the centre of the circle through
+/// a, b, c (in their plane), exactly. With u = b - a, v = c - a, n = u x v,
+/// the centre is a + W / D, W = |v|^2 (n x u) + |u|^2 (v x n), D = 2 |n|^2;
+/// so |centre - x| > k |centre - a|  <=>  |D (a - x) + W|^2 > k^2 |W|^2.
+bool outside_circle(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& x, double k) {
+  return filtered([&](auto nt) -> bool {
+    using NT = decltype(nt);
+    const Vec<NT> u = sub<NT>(b, a), v = sub<NT>(c, a), n = cross(u, v), ax = sub<NT>(a, x);
+    const NT uu = dot(u, u), vv = dot(v, v), d = NT(2) * dot(n, n);
+    const Vec<NT> nu = cross(n, u), vn = cross(v, n);
+    const Vec<NT> w{vv * nu.x + uu * vn.x, vv * nu.y + uu * vn.y, vv * nu.z + uu * vn.z};
+    const Vec<NT> dx{d * ax.x + w.x, d * ax.y + w.y, d * ax.z + w.z};
+    return dot(dx, dx) > NT(k) * NT(k) * dot(w, w);
+  });
+}
+
+}  // namespace
+
+bool tetgen_keeps_edge(const Point3d& p, const Point3d& q, const Point3d& r, const Point3d& s, double eps) {
+  if (!well_shaped_for_circumcircle(p, q, r) || !well_shaped_for_circumcircle(q, p, s)) return false;
+  const double k = 1 - 0.5 * eps;
+  return outside_circle(p, q, r, s, k) && outside_circle(q, p, s, r, k);
+}
+
 bool is_nearly_on_segment(const Point3d& p, const Point3d& a, const Point3d& b, double eps) {
   // Outside the segment's box grown by eps |ab| in some coordinate: farther
   // than that from every point of it. |ab| <= sqrt(3) max_k |b_k - a_k|;

@@ -44,6 +44,18 @@ bool fold_angle_less(const Point3d& p, const Point3d& q, const Point3d& r, const
 /// default) without it being there.
 bool is_nearly_on_segment(const Point3d& p, const Point3d& a, const Point3d& b, double eps);
 
+/// TetGen's flip test in a facet (1.5.0 lawsonflip / incircle3d) on faces
+/// (p, q, r) and (q, p, s): it flips edge pq when, about the circumcircle of
+/// the larger face, the other face's apex lies inside by more than its
+/// relative tolerance: (|cx| - rad) / rad < -eps, computed in doubles. True
+/// when that cannot happen: about each face's circumcircle the other apex
+/// lies exactly at |cx| > (1 - eps / 2) rad (the margin eps / 2 covers TetGen's
+/// rounding), and each face is shaped well enough for that rounding bound
+/// (|n|^2 >= 1e-6 longest_edge^4, n the face normal: TetGen's circumcentre
+/// then has a relative error below ~1e-10). A cocircular quad (a grid's
+/// rectangle) is kept; a fourth point inside is not.
+bool tetgen_keeps_edge(const Point3d& p, const Point3d& q, const Point3d& r, const Point3d& s, double eps);
+
 /// True when p and q are distinct and strictly closer than `tol` (exactly:
 /// |pq|^2 < tol^2 on the doubles given): TetGen merges two such points
 /// when tol is its shortest allowed edge (-T times the bbox diagonal).

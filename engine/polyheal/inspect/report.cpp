@@ -155,27 +155,46 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
   std::sort(r.degenerate_faces.begin(), r.degenerate_faces.end());
 
   // TetGen: adjacent triangles folded onto each other below its angle bound.
+  auto opposite = [](FaceView v, const Topology::InteriorEdge& e) {
+    for (Index i : v)
+      if (i != e.a && i != e.b) return i;
+    return v[0];
+  };
   const double cos_fold = cos_degrees(o.tetgen_fold_angle);
   auto sharp_fold = [&](const Topology::InteriorEdge& e) {
     FaceView f0 = soup.face(e.face0), f1 = soup.face(e.face1);
     if (f0.size() != 3 || f1.size() != 3 || shape[e.face0] == Shape::degenerate || shape[e.face1] == Shape::degenerate)
       return false;
-    auto opposite = [&](FaceView v) {
-      for (Index i : v)
-        if (i != e.a && i != e.b) return i;
-      return v[0];
-    };
-    return fold_angle_less(soup.points[e.a], soup.points[e.b], soup.points[opposite(f0)], soup.points[opposite(f1)],
-                           cos_fold);
+    return fold_angle_less(soup.points[e.a], soup.points[e.b], soup.points[opposite(f0, e)],
+                           soup.points[opposite(f1, e)], cos_fold);
+  };
+  // TetGen: adjacent triangles it merges into one facet (find_flip_hazards).
+  const double cos_merge = cos_degrees(o.tetgen_facet_angle - 1e-3);
+  auto merged_quad = [&](const Topology::InteriorEdge& e, EdgeQuad& q) {
+    FaceView f0 = soup.face(e.face0), f1 = soup.face(e.face1);
+    if (f0.size() != 3 || f1.size() != 3 || shape[e.face0] == Shape::degenerate || shape[e.face1] == Shape::degenerate)
+      return false;
+    q = {e.a, e.b, opposite(f0, e), opposite(f1, e), e.face0, e.face1};
+    const Point3d &p = soup.points[q.p], &a = soup.points[q.q], &r = soup.points[q.r], &s = soup.points[q.s];
+    return !fold_angle_less(p, a, r, s, cos_merge);
   };
   tbb::enumerable_thread_specific<std::vector<FacePair>> folds;
+  tbb::enumerable_thread_specific<std::vector<EdgeQuad>> merged;
   detail::for_each_index(topo.interior_edges.size(), o.parallel, [&](std::size_t i) {
     const Topology::InteriorEdge& e = topo.interior_edges[i];
+    EdgeQuad q;
     if (sharp_fold(e))
       folds.local().push_back({std::min<std::size_t>(e.face0, e.face1), std::max<std::size_t>(e.face0, e.face1)});
+    else if (o.tetgen_segments && merged_quad(e, q))
+      merged.local().push_back(q);
   });
   for (const auto& v : folds) r.sharp_folds.insert(r.sharp_folds.end(), v.begin(), v.end());
   std::sort(r.sharp_folds.begin(), r.sharp_folds.end());
+  if (o.tetgen_segments) {
+    std::vector<EdgeQuad> quads;
+    for (const auto& v : merged) quads.insert(quads.end(), v.begin(), v.end());
+    r.flip_hazards = find_flip_hazards(soup, quads, o.tetgen_epsilon);
+  }
 
   // TetGen: a vertex within its tolerance of an edge it is not on.
   if (o.tetgen_segments) {

@@ -24,6 +24,7 @@ struct InspectOptions {
   double needle_angle = 5.0;       // degrees; a face with a smaller angle is a needle (unless a cap)
   double tetgen_fold_angle = 0.1;  // degrees; TetGen's "nearly self-intersecting facets" bound
   double tetgen_epsilon = 1e-8;    // TetGen's relative tolerance (-T): near-collinear faces
+  double tetgen_facet_angle = 179.9;  // degrees; TetGen -p merges adjacent faces flatter than this (facet_ang_tol)
   /// Also search for vertices nearly on an edge they are not on (TetGen's
   /// segment recovery stops on them): a spatial search over all edges and
   /// points, about half a second per million faces on 2 cores, so asked
@@ -80,6 +81,12 @@ struct Report {
   std::vector<std::size_t> nearly_degenerate_faces;
   std::vector<VertexNearEdge> vertices_near_edges;  // welded ids; a vertex within tetgen_epsilon of an edge
   bool vertices_near_edges_checked = false;         // InspectOptions::tetgen_segments
+  /// Adjacent faces TetGen merges into one facet (dihedral angle above
+  /// tetgen_facet_angle, less a margin of 0.001 deg for its rounding) that
+  /// are not coplanar, and whose flipped diagonal would cut another face
+  /// (self_intersections.h find_flip_hazards). Searched for with
+  /// vertices_near_edges.
+  std::vector<FacePair> flip_hazards;
   /// Welded ids (a < b) closer than tetgen_epsilon x the bbox diagonal:
   /// TetGen merges them ("very short edge"), its faces then repeat a corner
   /// and it stops. Searched for with vertices_near_edges.
@@ -111,7 +118,8 @@ struct Report {
   /// refused by TetGen itself where it was run.
   bool tetgen_ready() const {
     return certified_clean() && sharp_folds.empty() && nearly_degenerate_faces.empty() &&
-           vertices_near_edges_checked && vertices_near_edges.empty() && close_vertices.empty() && !tetgen_refused;
+           vertices_near_edges_checked && vertices_near_edges.empty() && close_vertices.empty() && flip_hazards.empty() &&
+           !tetgen_refused;
   }
 };
 

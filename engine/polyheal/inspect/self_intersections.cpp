@@ -268,6 +268,61 @@ std::vector<std::array<Index, 2>> find_close_points(const Soup& soup, double tol
   return out;
 }
 
+std::vector<FacePair> find_flip_hazards(const Soup& soup, const std::vector<EdgeQuad>& quads, double eps) {
+  std::vector<EdgeQuad> bent;  // not coplanar (a flip changes the surface) and maybe flipped
+  for (const EdgeQuad& e : quads) {
+    const Point3d &p = soup.points[e.p], &q = soup.points[e.q], &r = soup.points[e.r], &s = soup.points[e.s];
+    if (CGAL::orientation(point(soup, e.p), point(soup, e.q), point(soup, e.r), point(soup, e.s)) != CGAL::COPLANAR &&
+        !tetgen_keeps_edge(p, q, r, s, eps))
+      bent.push_back(e);
+  }
+  std::vector<FacePair> out;
+  if (bent.empty()) return out;
+  const std::vector<FanTriangle> tris = fan_triangles(soup);
+  auto box_of = [&](std::initializer_list<Index> v, std::uint32_t id) {
+    double lo[3], hi[3];
+    for (int c = 0; c < 3; ++c) {
+      lo[c] = std::numeric_limits<double>::infinity();
+      hi[c] = -lo[c];
+      for (Index i : v) {
+        lo[c] = std::min(lo[c], soup.points[i][c]);
+        hi[c] = std::max(hi[c], soup.points[i][c]);
+      }
+    }
+    return Box(lo, hi, id);
+  };
+  std::vector<Box> face_boxes, flip_boxes;
+  face_boxes.reserve(tris.size());
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    face_boxes.push_back(box_of({tris[t].v[0], tris[t].v[1], tris[t].v[2]}, static_cast<std::uint32_t>(t)));
+  // The flipped triangles: (r, s, p) and (s, r, q) of quad k are 2k, 2k + 1.
+  std::vector<Tri> flipped;
+  flipped.reserve(2 * bent.size());
+  for (const EdgeQuad& e : bent) {
+    for (const auto& v : {std::array<Index, 3>{e.r, e.s, e.p}, std::array<Index, 3>{e.s, e.r, e.q}}) {
+      flip_boxes.push_back(box_of({v[0], v[1], v[2]}, static_cast<std::uint32_t>(tris.size() + flipped.size())));
+      flipped.push_back(detail::make_tri<InputKernel>(point(soup, v[0]), point(soup, v[1]), point(soup, v[2]), v[0],
+                                                      v[1], v[2]));
+    }
+  }
+  DegenerateFlags degenerate(soup, tris);
+  std::vector<char> hazard(bent.size(), 0);
+  CGAL::box_intersection_d(flip_boxes.begin(), flip_boxes.end(), face_boxes.begin(), face_boxes.end(),
+                           [&](const Box& f, const Box& g) {
+                             const std::size_t i = f.info() - tris.size(), k = i / 2;
+                             const FanTriangle& t = tris[g.info()];
+                             if (hazard[k] || t.face == bent[k].face0 || t.face == bent[k].face1) return;
+                             if (detail::faces_intersect(flipped[i], exact_triangle(soup, t, degenerate(g.info()))))
+                               hazard[k] = 1;
+                           },
+                           CGAL::Box_intersection_d::Box_traits_d<Box>(), kCutoff);
+  for (std::size_t k = 0; k < bent.size(); ++k)
+    if (hazard[k])
+      out.push_back({std::min(bent[k].face0, bent[k].face1), std::max(bent[k].face0, bent[k].face1)});
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 std::vector<VertexNearEdge> find_vertices_near_edges(const Soup& soup, const std::vector<std::array<Index, 2>>& edges,
                                                      double eps) {
   std::vector<VertexNearEdge> out;

@@ -64,6 +64,28 @@ void for_each_point_near_edge(const std::vector<Point3d>& points, const std::vec
 /// first).
 std::vector<std::array<Index, 2>> find_close_points(const Soup& soup, double tol);
 
+/// Faces (p, q, r) and (q, p, s) of a soup sharing the edge pq.
+struct EdgeQuad {
+  Index p, q, r, s;
+  std::size_t face0, face1;
+};
+
+/// TetGen's facet merging (1.5.0, `-p`: meshsurface -> mergefacets ->
+/// lawsonflip): adjacent faces whose dihedral angle is above its facet angle
+/// tolerance (179.9 deg) become one facet, the edge between them is dissolved
+/// and the merged facet made Delaunay by flipping edges. On coplanar faces a
+/// flip changes nothing; on faces that are not, the flipped pair (r, s, p),
+/// (s, r, q) is another surface, and where it cuts a third face TetGen's own
+/// surface intersects itself and it stops recovering the facet (throws in
+/// scoutcrossedge: a segment crossing the facet).
+/// Returns, as face pairs, the quads of `quads` that are not exactly coplanar,
+/// that TetGen may flip (not predicates.h tetgen_keeps_edge with its
+/// tolerance eps), and whose flipped triangles intersect (exactly, the pair
+/// test's semantics) a face of `soup` other than the quad's own two, sorted.
+/// Single flips only: after a flip TetGen tests the quad's four other edges
+/// and may flip on (cascades are not modelled).
+std::vector<FacePair> find_flip_hazards(const Soup& soup, const std::vector<EdgeQuad>& quads, double eps);
+
 /// Every point of `soup` nearly on (predicates.h is_nearly_on_segment, eps)
 /// one of `edges` (index pairs into soup.points), sorted.
 std::vector<VertexNearEdge> find_vertices_near_edges(const Soup& soup, const std::vector<std::array<Index, 2>>& edges,
