@@ -44,6 +44,12 @@ nlohmann::json near_edges_json(const std::vector<VertexNearEdge>& near) {
   return a;
 }
 
+nlohmann::json edge_pairs_json(const std::vector<EdgeNearEdge>& near) {
+  auto a = nlohmann::json::array();
+  for (const EdgeNearEdge& p : near) a.push_back({p.e, p.f});
+  return a;
+}
+
 nlohmann::json to_json(const CheckArgs& args, const Report& r, double read_s, double total_s) {
   using nlohmann::json;
   json j = {
@@ -85,6 +91,7 @@ nlohmann::json to_json(const CheckArgs& args, const Report& r, double read_s, do
         {"vertices_near_edges",
          r.vertices_near_edges_checked ? json(r.vertices_near_edges.size()) : json(nullptr)},  // null: not looked for
         {"close_vertices", r.vertices_near_edges_checked ? json(r.close_vertices.size()) : json(nullptr)},
+        {"edges_near_edges", r.vertices_near_edges_checked ? json(r.edges_near_edges.size()) : json(nullptr)},
         {"flip_hazards", r.vertices_near_edges_checked ? json(r.flip_hazards.size()) : json(nullptr)},
         {"fold_angle", args.inspect.tetgen_fold_angle},
         {"facet_angle", args.inspect.tetgen_facet_angle},
@@ -117,6 +124,7 @@ nlohmann::json to_json(const CheckArgs& args, const Report& r, double read_s, do
                   {"nearly_degenerate_faces", r.nearly_degenerate_faces},
                   {"vertices_near_edges", near_edges_json(r.vertices_near_edges)},
                   {"close_vertices", r.close_vertices},
+                  {"edges_near_edges", edge_pairs_json(r.edges_near_edges)},
                   {"flip_hazards", pairs_json(r.flip_hazards)}};
   return j;
 }
@@ -150,12 +158,13 @@ void print_text(const CheckArgs& args, const Report& r, double total_s) {
   const bool looked = r.vertices_near_edges_checked;
   const std::string near = looked ? std::to_string(r.vertices_near_edges.size()) : std::string("(not looked for: --tetgen-ready)");
   const std::string close = looked ? std::to_string(r.close_vertices.size()) : std::string("(not looked for)");
+  const std::string edges = looked ? std::to_string(r.edges_near_edges.size()) : std::string("(not looked for)");
   const std::string flips = looked ? std::to_string(r.flip_hazards.size()) : std::string("(not looked for)");
   std::printf("  tetgen tolerances: %zu sharp folds (<%g deg), %zu nearly degenerate faces, %s vertices nearly on an "
-              "edge, %s vertex pairs closer than its shortest edge (eps %g), %s face pairs it merges (>%g deg) "
-              "whose flip cuts another face\n",
+              "edge, %s vertex pairs and %s edge pairs closer than its shortest edge (eps %g x diagonal), %s face "
+              "pairs it merges (>%g deg) whose flip cuts another face\n",
               r.sharp_folds.size(), args.inspect.tetgen_fold_angle, r.nearly_degenerate_faces.size(), near.c_str(),
-              close.c_str(), args.inspect.tetgen_epsilon, flips.c_str(), args.inspect.tetgen_facet_angle);
+              close.c_str(), edges.c_str(), args.inspect.tetgen_epsilon, flips.c_str(), args.inspect.tetgen_facet_angle);
   if (r.closed && r.oriented) std::printf("  signed volume %.17g\n", r.signed_volume);
   if (const std::string note = inward_note(r); !note.empty()) std::printf("  note: %s\n", note.c_str());
 
@@ -187,6 +196,11 @@ void print_text(const CheckArgs& args, const Report& r, double total_s) {
                                      [](const std::array<Index, 2>& p) {
                                        return "(" + std::to_string(p[0]) + "," + std::to_string(p[1]) + ")";
                                      });
+    print_list<EdgeNearEdge>("edge pairs closer than TetGen's shortest edge", r.edges_near_edges,
+                             [](const EdgeNearEdge& p) {
+                               return "(" + std::to_string(p.e[0]) + "," + std::to_string(p.e[1]) + "):(" +
+                                      std::to_string(p.f[0]) + "," + std::to_string(p.f[1]) + ")";
+                             });
     print_list<FacePair>("face pairs TetGen merges whose flip cuts another face", r.flip_hazards, pair);
   }
   const bool ok = args.tetgen_ready ? r.tetgen_ready() : r.certified_clean();

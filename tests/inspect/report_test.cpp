@@ -295,6 +295,58 @@ TEST_CASE("inspect: a nearly flat quad whose flip TetGen makes would cut another
   }
 }
 
+TEST_CASE("inspect: edges passing closer than TetGen's shortest edge are reported, and stop TetGen",
+          "[inspect][tetgen]") {
+  // Two faces sharing corner 4, from a surface `rebuild` made of
+  // manifold__openscad-nonmanifold-crash (fixtures/corpus), with two far
+  // points giving it that surface's bounding box (diagonal ~31, so TetGen's
+  // shortest edge is ~3.1e-7). Edge 3-1 of the first and edge 4-2 of the
+  // second pass within ~1e-16 of each other (exactly apart: the four points
+  // are coplanar to 2e-19, the pair test finds no intersection); TetGen
+  // splits them at Steiner points that land on each other and aborts
+  // ("very small input feature size"). Moved 1e-6 apart along their common
+  // normal (more than the shortest edge), neither is reported and TetGen
+  // meshes them.
+  const std::vector<Point3d> p = {{-18.030730171908104, 2.3263691842875893, -205.46079155666953},
+                                  {-18.041955058990563, 2.337601092623986, -205.32686727720267},
+                                  {-18.041955450731763, 2.3488263714476445, -205.32686688546147},
+                                  {-18.0, 2.3068709207158804, -205.3688223361932},
+                                  {-18.030730171908104, 2.3151347778433182, -205.33809216428511}};
+  auto minus = [](const Point3d& a, const Point3d& b) { return Point3d{a[0] - b[0], a[1] - b[1], a[2] - b[2]}; };
+  const Point3d u = minus(p[1], p[3]), v = minus(p[2], p[4]);
+  Point3d n{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  for (double& x : n) x /= len;
+  int k = 0;
+  for (const double shift : {0.0, 1e-6}) {
+    INFO("second face moved by " << shift);
+    std::vector<Point3d> q = p;
+    for (int i : {0, 2, 4})
+      for (int c = 0; c < 3; ++c) q[i][c] += shift * n[c];
+    q.push_back({q[0][0] + 22, q[0][1], q[0][2]});
+    q.push_back({q[0][0], q[0][1] + 22, q[0][2]});
+    Soup s;
+    s.points = q;
+    s.add_triangle(1, 4, 3);
+    s.add_triangle(0, 4, 2);
+    InspectOptions io;
+    io.tetgen_segments = true;
+    const Report r = inspect(s, io);
+    REQUIRE(r.self_intersections.empty());
+    REQUIRE(r.vertices_near_edges.empty());
+    REQUIRE(r.close_vertices.empty());
+    const bool near = shift == 0;
+    REQUIRE(r.edges_near_edges.size() == (near ? 1u : 0u));
+    if (near) {
+      CHECK(r.edges_near_edges[0].e == std::array<Index, 2>{1, 3});
+      CHECK(r.edges_near_edges[0].f == std::array<Index, 2>{2, 4});
+    }
+    const std::string name = "edges_near_" + std::to_string(++k) + ".off", path = test::scratch(name);
+    write_soup(s, path);
+    CHECK(test::tetgen_meshes(path, "tg_" + name, "-pQ") == !near);
+  }
+}
+
 TEST_CASE("inspect: the sign of the enclosed volume, exactly, for the whole surface and per component", "[inspect]") {
   const Report out = inspect(test::box({0, 0, 0}, {1, 1, 1}));
   CHECK(out.volume_sign == 1);

@@ -4,6 +4,8 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Exact_rational.h>
 #include <CGAL/Interval_nt.h>
+#include <CGAL/Simple_cartesian.h>
+#include <CGAL/squared_distance_3.h>
 
 #include <algorithm>
 #include <cmath>
@@ -296,6 +298,63 @@ bool tetgen_keeps_edge(const Point3d& p, const Point3d& q, const Point3d& r, con
   if (!well_shaped_for_circumcircle(p, q, r) || !well_shaped_for_circumcircle(q, p, s)) return false;
   const double k = 1 - 0.5 * eps;
   return outside_circle(p, q, r, s, k) && outside_circle(q, p, s, r, k);
+}
+
+namespace {
+
+/// Segments ab and cd certainly farther apart than `tol`: some direction u
+/// among the axes, the two segments' directions, their common normal and
+/// the normals to each within their common plane separates their
+/// projections by more than tol |u|. Plain doubles with a rounding bound:
+/// u need not be exact (any u separates), each projection x.u of three
+/// products carries at most 3 eps |u|_1 max|x_k| of error, and |u| is taken
+/// 1e-12 larger. Most pairs a box search meets are decided here.
+bool static_segments_apart(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& d, double tol) {
+  double m = 0;
+  for (const Point3d* p : {&a, &b, &c, &d})
+    for (int k = 0; k < 3; ++k) m = std::max(m, std::fabs((*p)[k]));
+  if (!(m < 1e150) || !(tol > 0)) return false;
+  double v[3], w[3];
+  for (int k = 0; k < 3; ++k) {
+    v[k] = b[k] - a[k];
+    w[k] = d[k] - c[k];
+  }
+  auto crossed = [](const double* x, const double* y, double* z) {
+    z[0] = x[1] * y[2] - x[2] * y[1];
+    z[1] = x[2] * y[0] - x[0] * y[2];
+    z[2] = x[0] * y[1] - x[1] * y[0];
+  };
+  double n[3], u1[3], u2[3];
+  crossed(v, w, n);
+  crossed(v, n, u1);
+  crossed(w, n, u2);
+  auto apart_along = [&](const double* u) {
+    const double norm1 = std::fabs(u[0]) + std::fabs(u[1]) + std::fabs(u[2]);
+    if (!(norm1 < 1e150) || !(norm1 * m > 1e-250)) return false;  // no overflow; no underflow in the products
+    auto proj = [&](const Point3d& p) { return p[0] * u[0] + p[1] * u[1] + p[2] * u[2]; };
+    const double pa = proj(a), pb = proj(b), pc = proj(c), pd = proj(d);
+    const double gap = std::max(std::min(pc, pd) - std::max(pa, pb), std::min(pa, pb) - std::max(pc, pd));
+    const double len = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) * (1 + 1e-12);
+    return gap - 1e-15 * norm1 * m * 4 > tol * len;
+  };
+  static const double axes[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (const double* u : {axes[0], axes[1], axes[2], static_cast<const double*>(n), static_cast<const double*>(u1),
+                          static_cast<const double*>(u2), static_cast<const double*>(v), static_cast<const double*>(w)})
+    if (apart_along(u)) return true;
+  return false;
+}
+
+}  // namespace
+
+bool segments_closer_than(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& d, double tol) {
+  if (static_segments_apart(a, b, c, d, tol)) return false;
+  return filtered([&](auto nt) -> bool {
+    using NT = decltype(nt);
+    using K = CGAL::Simple_cartesian<NT>;
+    auto pt = [](const Point3d& p) { return typename K::Point_3(NT(p[0]), NT(p[1]), NT(p[2])); };
+    return CGAL::squared_distance(typename K::Segment_3(pt(a), pt(b)), typename K::Segment_3(pt(c), pt(d))) <
+           NT(tol) * NT(tol);
+  });
 }
 
 bool is_nearly_on_segment(const Point3d& p, const Point3d& a, const Point3d& b, double eps) {

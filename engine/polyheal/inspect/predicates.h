@@ -56,6 +56,10 @@ bool is_nearly_on_segment(const Point3d& p, const Point3d& a, const Point3d& b, 
 /// rectangle) is kept; a fourth point inside is not.
 bool tetgen_keeps_edge(const Point3d& p, const Point3d& q, const Point3d& r, const Point3d& s, double eps);
 
+/// True when segments ab and cd are strictly closer than `tol` (exactly:
+/// their squared distance < tol^2 on the doubles given).
+bool segments_closer_than(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& d, double tol);
+
 /// True when p and q are distinct and strictly closer than `tol` (exactly:
 /// |pq|^2 < tol^2 on the doubles given): TetGen merges two such points
 /// when tol is its shortest allowed edge (-T times the bbox diagonal).

@@ -193,13 +193,13 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
   if (o.tetgen_segments) {
     std::vector<EdgeQuad> quads;
     for (const auto& v : merged) quads.insert(quads.end(), v.begin(), v.end());
-    r.flip_hazards = find_flip_hazards(soup, quads, o.tetgen_epsilon);
+    r.flip_hazards = find_flip_hazards(soup, quads, o.tetgen_epsilon, o.parallel);
   }
 
   // TetGen: a vertex within its tolerance of an edge it is not on.
+  std::vector<std::array<Index, 2>> edges;
   if (o.tetgen_segments) {
     r.vertices_near_edges_checked = true;
-    std::vector<std::array<Index, 2>> edges;
     edges.reserve(topo.interior_edges.size() + topo.boundary_edges.size());
     for (const Topology::InteriorEdge& e : topo.interior_edges) edges.push_back({e.a, e.b});
     for (const Edge& e : topo.boundary_edges) edges.push_back({e.a, e.b});
@@ -219,7 +219,12 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
 
   // TetGen: two points closer than its shortest edge (-T times the bbox
   // diagonal, its 'minedgelength') become one.
-  if (o.tetgen_segments) r.close_vertices = find_close_points(soup, o.tetgen_epsilon * bbox_diagonal(r));
+  // two edges closer than that, sharing no vertex: its Steiner points on them
+  // would be.
+  if (o.tetgen_segments) {
+    r.close_vertices = find_close_points(soup, o.tetgen_epsilon * bbox_diagonal(r));
+    r.edges_near_edges = find_edges_near_edges(soup, edges, o.tetgen_epsilon * bbox_diagonal(r), o.parallel);
+  }
   // About the bbox centre: the same sum for a closed surface, without the
   // cancellation of determinants ~|p|^3 far from the origin (a millimetre
   // box 1e8 away summed to 97756 about the origin).

@@ -91,6 +91,9 @@ struct Report {
   /// TetGen merges them ("very short edge"), its faces then repeat a corner
   /// and it stops. Searched for with vertices_near_edges.
   std::vector<std::array<Index, 2>> close_vertices;
+  /// Edges sharing no vertex closer than that (self_intersections.h
+  /// find_edges_near_edges): TetGen's Steiner points on them would be.
+  std::vector<EdgeNearEdge> edges_near_edges;
   /// Set by a caller that ran TetGen itself on this surface and saw it fail
   /// (repair --for tetgen); inspect() never sets it.
   bool tetgen_refused = false;
@@ -118,7 +121,8 @@ struct Report {
   /// refused by TetGen itself where it was run.
   bool tetgen_ready() const {
     return certified_clean() && sharp_folds.empty() && nearly_degenerate_faces.empty() &&
-           vertices_near_edges_checked && vertices_near_edges.empty() && close_vertices.empty() && flip_hazards.empty() &&
+           vertices_near_edges_checked && vertices_near_edges.empty() && close_vertices.empty() &&
+           edges_near_edges.empty() && flip_hazards.empty() &&
            !tetgen_refused;
   }
 };

@@ -268,14 +268,57 @@ std::vector<std::array<Index, 2>> find_close_points(const Soup& soup, double tol
   return out;
 }
 
-std::vector<FacePair> find_flip_hazards(const Soup& soup, const std::vector<EdgeQuad>& quads, double eps) {
-  std::vector<EdgeQuad> bent;  // not coplanar (a flip changes the surface) and maybe flipped
-  for (const EdgeQuad& e : quads) {
-    const Point3d &p = soup.points[e.p], &q = soup.points[e.q], &r = soup.points[e.r], &s = soup.points[e.s];
-    if (CGAL::orientation(point(soup, e.p), point(soup, e.q), point(soup, e.r), point(soup, e.s)) != CGAL::COPLANAR &&
-        !tetgen_keeps_edge(p, q, r, s, eps))
-      bent.push_back(e);
+std::vector<EdgeNearEdge> find_edges_near_edges(const Soup& soup, const std::vector<std::array<Index, 2>>& edges,
+                                                double tol, bool parallel) {
+  std::vector<EdgeNearEdge> out;
+  if (!(tol > 0)) return out;
+  std::vector<Box> boxes;
+  boxes.reserve(edges.size());
+  const double half = 0.5 * tol * (1 + 1e-9);  // two boxes meet when their segments are within tol on every axis
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    const Point3d &a = soup.points[edges[i][0]], &b = soup.points[edges[i][1]];
+    double lo[3], hi[3];
+    for (int c = 0; c < 3; ++c) {
+      lo[c] = std::nextafter(std::min(a[c], b[c]) - half, -std::numeric_limits<double>::infinity());
+      hi[c] = std::nextafter(std::max(a[c], b[c]) + half, std::numeric_limits<double>::infinity());
+    }
+    boxes.emplace_back(lo, hi, static_cast<std::uint32_t>(i));
   }
+  std::vector<const Box*> pointers(boxes.size());
+  for (std::size_t i = 0; i < boxes.size(); ++i) pointers[i] = &boxes[i];
+  // Most meeting boxes are of edges sharing a vertex (always meeting): the
+  // broad phase is the cost, so it runs in parallel as scan()'s does.
+  tbb::enumerable_thread_specific<std::vector<EdgeNearEdge>> local;
+  box_pairs(
+      pointers,
+      [&](const Box* x, const Box* y) {
+        std::array<Index, 2> e = edges[x->info()], f = edges[y->info()];
+        if (e[0] == f[0] || e[0] == f[1] || e[1] == f[0] || e[1] == f[1]) return;
+        const Point3d* p = soup.points.data();
+        if (!segments_closer_than(p[e[0]], p[e[1]], p[f[0]], p[f[1]], tol)) return;
+        if (e[0] > e[1]) std::swap(e[0], e[1]);
+        if (f[0] > f[1]) std::swap(f[0], f[1]);
+        local.local().push_back(e < f ? EdgeNearEdge{e, f} : EdgeNearEdge{f, e});
+      },
+      parallel ? 2 : 0);
+  for (const auto& v : local) out.insert(out.end(), v.begin(), v.end());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<FacePair> find_flip_hazards(const Soup& soup, const std::vector<EdgeQuad>& quads, double eps,
+                                        bool parallel) {
+  std::vector<char> flips(quads.size(), 0);  // not coplanar (a flip changes the surface) and maybe flipped
+  detail::for_each_index(quads.size(), parallel, [&](std::size_t i) {
+    const EdgeQuad& e = quads[i];
+    const Point3d &p = soup.points[e.p], &q = soup.points[e.q], &r = soup.points[e.r], &s = soup.points[e.s];
+    flips[i] = CGAL::orientation(point(soup, e.p), point(soup, e.q), point(soup, e.r), point(soup, e.s)) !=
+                   CGAL::COPLANAR &&
+               !tetgen_keeps_edge(p, q, r, s, eps);
+  });
+  std::vector<EdgeQuad> bent;
+  for (std::size_t i = 0; i < quads.size(); ++i)
+    if (flips[i]) bent.push_back(quads[i]);
   std::vector<FacePair> out;
   if (bent.empty()) return out;
   const std::vector<FanTriangle> tris = fan_triangles(soup);
@@ -307,15 +350,30 @@ std::vector<FacePair> find_flip_hazards(const Soup& soup, const std::vector<Edge
   }
   DegenerateFlags degenerate(soup, tris);
   std::vector<char> hazard(bent.size(), 0);
-  CGAL::box_intersection_d(flip_boxes.begin(), flip_boxes.end(), face_boxes.begin(), face_boxes.end(),
-                           [&](const Box& f, const Box& g) {
-                             const std::size_t i = f.info() - tris.size(), k = i / 2;
-                             const FanTriangle& t = tris[g.info()];
-                             if (hazard[k] || t.face == bent[k].face0 || t.face == bent[k].face1) return;
-                             if (detail::faces_intersect(flipped[i], exact_triangle(soup, t, degenerate(g.info()))))
-                               hazard[k] = 1;
-                           },
-                           CGAL::Box_intersection_d::Box_traits_d<Box>(), kCutoff);
+  auto found = [&](const Box* f, const Box* g) {
+    const std::size_t i = f->info() - tris.size(), k = i / 2;
+    const FanTriangle& t = tris[g->info()];
+    if (hazard[k] || t.face == bent[k].face0 || t.face == bent[k].face1) return;
+    if (detail::faces_intersect(flipped[i], exact_triangle(soup, t, degenerate(g->info())))) hazard[k] = 1;
+  };
+  // Each half of the flipped triangles against all faces (each task its own
+  // copy of the face pointers: box_intersection_d reorders them); a quad's
+  // two triangles stay in one half, so hazard[k] has one writer.
+  std::vector<const Box*> faces_a(face_boxes.size()), flips_a(flip_boxes.size());
+  for (std::size_t i = 0; i < face_boxes.size(); ++i) faces_a[i] = &face_boxes[i];
+  for (std::size_t i = 0; i < flip_boxes.size(); ++i) flips_a[i] = &flip_boxes[i];
+  auto against_faces = [&](std::vector<const Box*>& flips, std::vector<const Box*>& faces) {
+    CGAL::box_intersection_d<CGAL::Sequential_tag>(flips.begin(), flips.end(), faces.begin(), faces.end(), found,
+                                                   Traits(), kCutoff);
+  };
+  if (parallel && flips_a.size() >= 2000) {
+    const auto half = flips_a.begin() + static_cast<std::ptrdiff_t>(2 * (bent.size() / 2));
+    std::vector<const Box*> flips_b(half, flips_a.end()), faces_b = faces_a;
+    flips_a.erase(half, flips_a.end());
+    tbb::parallel_invoke([&] { against_faces(flips_a, faces_a); }, [&] { against_faces(flips_b, faces_b); });
+  } else {
+    against_faces(flips_a, faces_a);
+  }
   for (std::size_t k = 0; k < bent.size(); ++k)
     if (hazard[k])
       out.push_back({std::min(bent[k].face0, bent[k].face1), std::max(bent[k].face0, bent[k].face1)});

@@ -64,6 +64,24 @@ void for_each_point_near_edge(const std::vector<Point3d>& points, const std::vec
 /// first).
 std::vector<std::array<Index, 2>> find_close_points(const Soup& soup, double tol);
 
+/// Two edges (index pairs into soup.points, a < b) sharing no vertex, closer
+/// than TetGen's shortest edge without being the same: TetGen splits a
+/// missing segment at a Steiner point, and on two segments that nearly cross
+/// the points it puts land within its shortest edge of each other; it stops
+/// ("very small input feature size", delaunizesegments). Seen: a rebuilt
+/// surface where two faces sharing one corner had edges passing 1e-16 apart
+/// (exactly apart; the four points coplanar to 2e-19).
+struct EdgeNearEdge {
+  std::array<Index, 2> e, f;  // e < f
+  bool operator<(const EdgeNearEdge& o) const { return e != o.e ? e < o.e : f < o.f; }
+};
+
+/// Every pair of `edges` sharing no vertex that are strictly closer than
+/// `tol` (predicates.h segments_closer_than), sorted. `parallel`: TBB in the
+/// broad phase.
+std::vector<EdgeNearEdge> find_edges_near_edges(const Soup& soup, const std::vector<std::array<Index, 2>>& edges,
+                                                double tol, bool parallel = true);
+
 /// Faces (p, q, r) and (q, p, s) of a soup sharing the edge pq.
 struct EdgeQuad {
   Index p, q, r, s;
@@ -84,7 +102,8 @@ struct EdgeQuad {
 /// test's semantics) a face of `soup` other than the quad's own two, sorted.
 /// Single flips only: after a flip TetGen tests the quad's four other edges
 /// and may flip on (cascades are not modelled).
-std::vector<FacePair> find_flip_hazards(const Soup& soup, const std::vector<EdgeQuad>& quads, double eps);
+std::vector<FacePair> find_flip_hazards(const Soup& soup, const std::vector<EdgeQuad>& quads, double eps,
+                                        bool parallel = true);
 
 /// Every point of `soup` nearly on (predicates.h is_nearly_on_segment, eps)
 /// one of `edges` (index pairs into soup.points), sorted.
