@@ -50,6 +50,12 @@ nlohmann::json edge_pairs_json(const std::vector<EdgeNearEdge>& near) {
   return a;
 }
 
+nlohmann::json near_faces_json(const std::vector<VertexNearFace>& near) {
+  auto a = nlohmann::json::array();
+  for (const VertexNearFace& v : near) a.push_back({{"vertex", v.vertex}, {"face", v.face}});
+  return a;
+}
+
 nlohmann::json to_json(const CheckArgs& args, const Report& r, double read_s, double total_s) {
   using nlohmann::json;
   json j = {
@@ -92,6 +98,7 @@ nlohmann::json to_json(const CheckArgs& args, const Report& r, double read_s, do
          r.vertices_near_edges_checked ? json(r.vertices_near_edges.size()) : json(nullptr)},  // null: not looked for
         {"close_vertices", r.vertices_near_edges_checked ? json(r.close_vertices.size()) : json(nullptr)},
         {"edges_near_edges", r.vertices_near_edges_checked ? json(r.edges_near_edges.size()) : json(nullptr)},
+        {"vertices_near_faces", r.vertices_near_edges_checked ? json(r.vertices_near_faces.size()) : json(nullptr)},
         {"flip_hazards", r.vertices_near_edges_checked ? json(r.flip_hazards.size()) : json(nullptr)},
         {"fold_angle", args.inspect.tetgen_fold_angle},
         {"facet_angle", args.inspect.tetgen_facet_angle},
@@ -125,6 +132,7 @@ nlohmann::json to_json(const CheckArgs& args, const Report& r, double read_s, do
                   {"vertices_near_edges", near_edges_json(r.vertices_near_edges)},
                   {"close_vertices", r.close_vertices},
                   {"edges_near_edges", edge_pairs_json(r.edges_near_edges)},
+                  {"vertices_near_faces", near_faces_json(r.vertices_near_faces)},
                   {"flip_hazards", pairs_json(r.flip_hazards)}};
   return j;
 }
@@ -159,12 +167,14 @@ void print_text(const CheckArgs& args, const Report& r, double total_s) {
   const std::string near = looked ? std::to_string(r.vertices_near_edges.size()) : std::string("(not looked for: --tetgen-ready)");
   const std::string close = looked ? std::to_string(r.close_vertices.size()) : std::string("(not looked for)");
   const std::string edges = looked ? std::to_string(r.edges_near_edges.size()) : std::string("(not looked for)");
+  const std::string faces = looked ? std::to_string(r.vertices_near_faces.size()) : std::string("(not looked for)");
   const std::string flips = looked ? std::to_string(r.flip_hazards.size()) : std::string("(not looked for)");
   std::printf("  tetgen tolerances: %zu sharp folds (<%g deg), %zu nearly degenerate faces, %s vertices nearly on an "
-              "edge, %s vertex pairs and %s edge pairs closer than its shortest edge (eps %g x diagonal), %s face "
-              "pairs it merges (>%g deg) whose flip cuts another face\n",
+              "edge, %s vertex pairs, %s edge pairs and %s vertex-face pairs closer than its shortest edge (eps %g x "
+              "diagonal), %s face pairs it merges (>%g deg) whose flip cuts another face\n",
               r.sharp_folds.size(), args.inspect.tetgen_fold_angle, r.nearly_degenerate_faces.size(), near.c_str(),
-              close.c_str(), edges.c_str(), args.inspect.tetgen_epsilon, flips.c_str(), args.inspect.tetgen_facet_angle);
+              close.c_str(), edges.c_str(), faces.c_str(), args.inspect.tetgen_epsilon, flips.c_str(),
+              args.inspect.tetgen_facet_angle);
   if (r.closed && r.oriented) std::printf("  signed volume %.17g\n", r.signed_volume);
   if (const std::string note = inward_note(r); !note.empty()) std::printf("  note: %s\n", note.c_str());
 
@@ -201,6 +211,10 @@ void print_text(const CheckArgs& args, const Report& r, double total_s) {
                                return "(" + std::to_string(p.e[0]) + "," + std::to_string(p.e[1]) + "):(" +
                                       std::to_string(p.f[0]) + "," + std::to_string(p.f[1]) + ")";
                              });
+    print_list<VertexNearFace>("vertices closer than TetGen's shortest edge to a face (vertex:face)",
+                               r.vertices_near_faces, [](const VertexNearFace& v) {
+                                 return std::to_string(v.vertex) + ":" + std::to_string(v.face);
+                               });
     print_list<FacePair>("face pairs TetGen merges whose flip cuts another face", r.flip_hazards, pair);
   }
   const bool ok = args.tetgen_ready ? r.tetgen_ready() : r.certified_clean();

@@ -90,6 +90,8 @@ inline nlohmann::json checks_json(const Report& r) {
            r.vertices_near_edges_checked ? nlohmann::json(r.close_vertices.size()) : nlohmann::json(nullptr)},
           {"tetgen_edges_near_edges",
            r.vertices_near_edges_checked ? nlohmann::json(r.edges_near_edges.size()) : nlohmann::json(nullptr)},
+          {"tetgen_vertices_near_faces",
+           r.vertices_near_edges_checked ? nlohmann::json(r.vertices_near_faces.size()) : nlohmann::json(nullptr)},
           {"tetgen_flip_hazards",
            r.vertices_near_edges_checked ? nlohmann::json(r.flip_hazards.size()) : nlohmann::json(nullptr)},
           {"certified_clean", r.certified_clean()},

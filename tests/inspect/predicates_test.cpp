@@ -184,3 +184,51 @@ TEST_CASE("predicates: is_nearly_on_segment equals exact rational evaluation, at
   CHECK(no_far > 1000);
   CHECK(no_beyond > 1000);
 }
+
+TEST_CASE("predicates: segment-segment and point-triangle distance tests equal exact evaluation at their threshold",
+          "[inspect][tetgen]") {
+  // Random segment pairs (generic, nearly crossing, parallel, collinear) and
+  // point-triangle pairs (the point over the interior, beyond an edge or a
+  // corner, as it falls), each asked with tol at its own distance times 1 +- 1e-15,
+  // 1e-9 and 0.5 / 2: right at the threshold the static separation test
+  // must leave the answer to the exact path. Truth: Epeck's squared
+  // distance against tol^2.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto kp = [](const Point3d& p) { return Kernel::Point_3(p[0], p[1], p[2]); };
+  const double factors[] = {0.5, 1 - 1e-9, 1 - 1e-15, 1, 1 + 1e-15, 1 + 1e-9, 2};
+  int closer = 0, farther = 0;
+  for (int i = 0; i < 3000; ++i) {
+    Point3d a{u(rng), u(rng), u(rng)}, b{u(rng), u(rng), u(rng)}, c{u(rng), u(rng), u(rng)}, d{u(rng), u(rng), u(rng)};
+    const Point3d e{u(rng), u(rng), u(rng)};  // the triangle is a b e, asked about d
+    switch (i % 4) {
+      case 1:  // nearly crossing: cd through a point of ab, lifted by ~1e-15
+        for (int k = 0; k < 3; ++k) {
+          const double m = 0.5 * (a[k] + b[k]);
+          d[k] = 2 * m - c[k] + (k == 2 ? 1e-15 : 0);
+        }
+        break;
+      case 2:  // parallel
+        for (int k = 0; k < 3; ++k) d[k] = c[k] + (b[k] - a[k]) * 0.7;
+        break;
+      case 3:  // collinear, apart along the line
+        for (int k = 0; k < 3; ++k) {
+          c[k] = b[k] + (b[k] - a[k]) * 0.1;
+          d[k] = b[k] + (b[k] - a[k]) * 0.9;
+        }
+        break;
+    }
+    const Kernel::FT s2 = CGAL::squared_distance(Kernel::Segment_3(kp(a), kp(b)), Kernel::Segment_3(kp(c), kp(d)));
+    const Kernel::FT t2 = CGAL::squared_distance(kp(d), Kernel::Triangle_3(kp(a), kp(b), kp(e)));
+    for (double f : factors) {
+      const double ts = std::sqrt(CGAL::to_double(s2)) * f, tt = std::sqrt(CGAL::to_double(t2)) * f;
+      INFO("case " << i << " factor " << f);
+      const bool want_s = s2 < Kernel::FT(ts) * Kernel::FT(ts), want_t = t2 < Kernel::FT(tt) * Kernel::FT(tt);
+      if (ts > 0) CHECK(segments_closer_than(a, b, c, d, ts) == want_s);
+      if (tt > 0) CHECK(point_closer_than_to_triangle(d, a, b, e, tt) == want_t);
+      ++(want_s ? closer : farther);
+    }
+  }
+  CHECK(closer > 3000);
+  CHECK(farther > 3000);
+}

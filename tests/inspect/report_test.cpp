@@ -347,6 +347,34 @@ TEST_CASE("inspect: edges passing closer than TetGen's shortest edge are reporte
   }
 }
 
+TEST_CASE("inspect: a vertex closer than TetGen's shortest edge to a face is reported", "[inspect][tetgen]") {
+  // A tetrahedron whose bottom face lies in z = 0 and another standing on it
+  // apex down, the apex h above the bottom face's interior (the first's top
+  // is at z = -1: the bottom face is its top face here). TetGen's shortest
+  // edge is 1e-8 x the diagonal (~3.5e-8); found on rebuild's surface of
+  // vhacd__hornbug, a grid vertex 1e-19 over a kept input face, where
+  // tetgen -p aborts recovering a facet (it meshes this small case).
+  for (const auto& [h, near] : {std::pair{1e-12, true}, {1e-3, false}}) {
+    INFO("height " << h);
+    const Soup below = test::soup({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5, 0.5, -1}},
+                                  {{0, 1, 2}, {0, 3, 1}, {1, 3, 2}, {2, 3, 0}});
+    const Soup above = test::soup({{0.5, 0.5, h}, {0, 0, 1}, {2, 0, 1}, {0, 2, 1}},
+                                  {{1, 2, 3}, {0, 2, 1}, {0, 3, 2}, {0, 1, 3}});
+    const Soup s = test::concat(below, above);
+    InspectOptions io;
+    io.tetgen_segments = true;
+    const Report r = inspect(s, io);
+    REQUIRE(r.certified_clean());
+    REQUIRE(r.vertices_near_faces.size() == (near ? 1u : 0u));
+    if (near) {
+      CHECK(r.vertices_near_faces[0].vertex == 4);
+      CHECK(r.vertices_near_faces[0].face == 0);
+    }
+    CHECK(r.edges_near_edges.empty());
+    CHECK(r.tetgen_ready() == !near);
+  }
+}
+
 TEST_CASE("inspect: the sign of the enclosed volume, exactly, for the whole surface and per component", "[inspect]") {
   const Report out = inspect(test::box({0, 0, 0}, {1, 1, 1}));
   CHECK(out.volume_sign == 1);

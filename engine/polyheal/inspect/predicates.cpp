@@ -302,59 +302,127 @@ bool tetgen_keeps_edge(const Point3d& p, const Point3d& q, const Point3d& r, con
 
 namespace {
 
-/// Segments ab and cd certainly farther apart than `tol`: some direction u
-/// among the axes, the two segments' directions, their common normal and
-/// the normals to each within their common plane separates their
-/// projections by more than tol |u|. Plain doubles with a rounding bound:
-/// u need not be exact (any u separates), each projection x.u of three
-/// products carries at most 3 eps |u|_1 max|x_k| of error, and |u| is taken
-/// 1e-12 larger. Most pairs a box search meets are decided here.
-bool static_segments_apart(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& d, double tol) {
+double max_abs(std::initializer_list<const Point3d*> points) {
   double m = 0;
-  for (const Point3d* p : {&a, &b, &c, &d})
+  for (const Point3d* p : points)
     for (int k = 0; k < 3; ++k) m = std::max(m, std::fabs((*p)[k]));
-  if (!(m < 1e150) || !(tol > 0)) return false;
-  double v[3], w[3];
+  return m;
+}
+
+/// Point sets x and y (a segment's ends, a triangle's corners, a point)
+/// certainly farther apart than `tol`: along direction u their projections
+/// are separated by more than tol |u|. Plain doubles with a rounding bound:
+/// u need not be exact (any u separates), each projection of three products
+/// carries at most 3 eps |u|_1 m of error (m bounds every |coordinate|; 4e-15
+/// used, for both sides), and |u| is taken 1e-12 larger. Undecided (false)
+/// near overflow or where the products could underflow.
+bool separated_along(std::initializer_list<const Point3d*> x, std::initializer_list<const Point3d*> y,
+                     const double* u, double m, double tol) {
+  const double norm1 = std::fabs(u[0]) + std::fabs(u[1]) + std::fabs(u[2]);
+  if (!(m < 1e150) || !(norm1 < 1e150) || !(norm1 * m > 1e-250)) return false;
+  auto range = [&](std::initializer_list<const Point3d*> points) {
+    double lo = HUGE_VAL, hi = -HUGE_VAL;
+    for (const Point3d* p : points) {
+      const double d = (*p)[0] * u[0] + (*p)[1] * u[1] + (*p)[2] * u[2];
+      lo = std::min(lo, d);
+      hi = std::max(hi, d);
+    }
+    return std::pair{lo, hi};
+  };
+  const auto [xl, xh] = range(x);
+  const auto [yl, yh] = range(y);
+  const double gap = std::max(yl - xh, xl - yh);
+  const double len = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) * (1 + 1e-12);
+  return gap - 4e-15 * norm1 * m > tol * len;
+}
+
+void cross3(const double* x, const double* y, double* z) {
+  z[0] = x[1] * y[2] - x[2] * y[1];
+  z[1] = x[2] * y[0] - x[0] * y[2];
+  z[2] = x[0] * y[1] - x[1] * y[0];
+}
+
+/// Segments ab and cd certainly farther apart than `tol`, separated along an
+/// axis, either segment's direction, their common normal or the normal to
+/// either within their common plane. Most pairs a box search meets are
+/// decided here.
+bool static_segments_apart(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& d, double tol) {
+  if (!(tol > 0)) return false;
+  const double m = max_abs({&a, &b, &c, &d});
+  double v[3], w[3], n[3], u1[3], u2[3];
   for (int k = 0; k < 3; ++k) {
     v[k] = b[k] - a[k];
     w[k] = d[k] - c[k];
   }
-  auto crossed = [](const double* x, const double* y, double* z) {
-    z[0] = x[1] * y[2] - x[2] * y[1];
-    z[1] = x[2] * y[0] - x[0] * y[2];
-    z[2] = x[0] * y[1] - x[1] * y[0];
-  };
-  double n[3], u1[3], u2[3];
-  crossed(v, w, n);
-  crossed(v, n, u1);
-  crossed(w, n, u2);
-  auto apart_along = [&](const double* u) {
-    const double norm1 = std::fabs(u[0]) + std::fabs(u[1]) + std::fabs(u[2]);
-    if (!(norm1 < 1e150) || !(norm1 * m > 1e-250)) return false;  // no overflow; no underflow in the products
-    auto proj = [&](const Point3d& p) { return p[0] * u[0] + p[1] * u[1] + p[2] * u[2]; };
-    const double pa = proj(a), pb = proj(b), pc = proj(c), pd = proj(d);
-    const double gap = std::max(std::min(pc, pd) - std::max(pa, pb), std::min(pa, pb) - std::max(pc, pd));
-    const double len = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) * (1 + 1e-12);
-    return gap - 1e-15 * norm1 * m * 4 > tol * len;
-  };
+  cross3(v, w, n);
+  cross3(v, n, u1);
+  cross3(w, n, u2);
   static const double axes[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   for (const double* u : {axes[0], axes[1], axes[2], static_cast<const double*>(n), static_cast<const double*>(u1),
                           static_cast<const double*>(u2), static_cast<const double*>(v), static_cast<const double*>(w)})
-    if (apart_along(u)) return true;
+    if (separated_along({&a, &b}, {&c, &d}, u, m, tol)) return true;
   return false;
 }
 
-}  // namespace
+/// Point p certainly farther than `tol` from triangle abc, separated along
+/// its normal, the normal to one of its edges in its plane, or the direction
+/// from a corner to p.
+bool static_point_triangle_apart(const Point3d& p, const Point3d& a, const Point3d& b, const Point3d& c, double tol) {
+  if (!(tol > 0)) return false;
+  const double m = max_abs({&p, &a, &b, &c});
+  double e[3][3], n[3], u[3];
+  for (int k = 0; k < 3; ++k) {
+    e[0][k] = b[k] - a[k];
+    e[1][k] = c[k] - b[k];
+    e[2][k] = a[k] - c[k];
+  }
+  cross3(e[0], e[1], n);
+  if (separated_along({&p}, {&a, &b, &c}, n, m, tol)) return true;
+  for (int i = 0; i < 3; ++i) {
+    cross3(e[i], n, u);
+    if (separated_along({&p}, {&a, &b, &c}, u, m, tol)) return true;
+  }
+  for (const Point3d* x : {&a, &b, &c}) {  // beyond a corner
+    const double d[3] = {p[0] - (*x)[0], p[1] - (*x)[1], p[2] - (*x)[2]};
+    if (separated_along({&p}, {&a, &b, &c}, d, m, tol)) return true;
+  }
+  return false;
+}
 
-bool segments_closer_than(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& d, double tol) {
-  if (static_segments_apart(a, b, c, d, tol)) return false;
+/// The squared distance between the two objects `make(K, point)` builds (a
+/// pair; K is Simple_cartesian over intervals, then over rationals) is below
+/// tol^2, exactly.
+template <class Make>
+bool squared_distance_below(Make make, double tol) {
   return filtered([&](auto nt) -> bool {
     using NT = decltype(nt);
     using K = CGAL::Simple_cartesian<NT>;
     auto pt = [](const Point3d& p) { return typename K::Point_3(NT(p[0]), NT(p[1]), NT(p[2])); };
-    return CGAL::squared_distance(typename K::Segment_3(pt(a), pt(b)), typename K::Segment_3(pt(c), pt(d))) <
-           NT(tol) * NT(tol);
+    const auto objects = make(K(), pt);
+    return CGAL::squared_distance(objects.first, objects.second) < NT(tol) * NT(tol);
   });
+}
+
+}  // namespace
+
+bool point_closer_than_to_triangle(const Point3d& p, const Point3d& a, const Point3d& b, const Point3d& c, double tol) {
+  if (static_point_triangle_apart(p, a, b, c, tol)) return false;
+  return squared_distance_below(
+      [&](auto k, auto pt) {
+        using K = decltype(k);
+        return std::pair{pt(p), typename K::Triangle_3(pt(a), pt(b), pt(c))};
+      },
+      tol);
+}
+
+bool segments_closer_than(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& d, double tol) {
+  if (static_segments_apart(a, b, c, d, tol)) return false;
+  return squared_distance_below(
+      [&](auto k, auto pt) {
+        using K = decltype(k);
+        return std::pair{typename K::Segment_3(pt(a), pt(b)), typename K::Segment_3(pt(c), pt(d))};
+      },
+      tol);
 }
 
 bool is_nearly_on_segment(const Point3d& p, const Point3d& a, const Point3d& b, double eps) {

@@ -219,11 +219,12 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
 
   // TetGen: two points closer than its shortest edge (-T times the bbox
   // diagonal, its 'minedgelength') become one.
-  // two edges closer than that, sharing no vertex: its Steiner points on them
-  // would be.
+  // two edges closer than that, sharing no vertex, or a vertex and a face:
+  // its Steiner points on them would be.
   if (o.tetgen_segments) {
     r.close_vertices = find_close_points(soup, o.tetgen_epsilon * bbox_diagonal(r));
     r.edges_near_edges = find_edges_near_edges(soup, edges, o.tetgen_epsilon * bbox_diagonal(r), o.parallel);
+    r.vertices_near_faces = find_vertices_near_faces(soup, o.tetgen_epsilon * bbox_diagonal(r));
   }
   // About the bbox centre: the same sum for a closed surface, without the
   // cancellation of determinants ~|p|^3 far from the origin (a millimetre

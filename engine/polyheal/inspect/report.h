@@ -94,6 +94,9 @@ struct Report {
   /// Edges sharing no vertex closer than that (self_intersections.h
   /// find_edges_near_edges): TetGen's Steiner points on them would be.
   std::vector<EdgeNearEdge> edges_near_edges;
+  /// Vertices closer than that to a face they are not a corner of
+  /// (find_vertices_near_faces).
+  std::vector<VertexNearFace> vertices_near_faces;
   /// Set by a caller that ran TetGen itself on this surface and saw it fail
   /// (repair --for tetgen); inspect() never sets it.
   bool tetgen_refused = false;
@@ -122,7 +125,7 @@ struct Report {
   bool tetgen_ready() const {
     return certified_clean() && sharp_folds.empty() && nearly_degenerate_faces.empty() &&
            vertices_near_edges_checked && vertices_near_edges.empty() && close_vertices.empty() &&
-           edges_near_edges.empty() && flip_hazards.empty() &&
+           edges_near_edges.empty() && vertices_near_faces.empty() && flip_hazards.empty() &&
            !tetgen_refused;
   }
 };

@@ -306,6 +306,52 @@ std::vector<EdgeNearEdge> find_edges_near_edges(const Soup& soup, const std::vec
   return out;
 }
 
+std::vector<VertexNearFace> find_vertices_near_faces(const Soup& soup, double tol) {
+  std::vector<VertexNearFace> out;
+  if (!(tol > 0)) return out;
+  const std::vector<FanTriangle> tris = fan_triangles(soup);
+  std::vector<Box> face_boxes, point_boxes;
+  face_boxes.reserve(tris.size());
+  const double grow = tol * (1 + 1e-9);
+  for (std::size_t t = 0; t < tris.size(); ++t) {
+    double lo[3], hi[3];
+    for (int c = 0; c < 3; ++c) {
+      lo[c] = std::numeric_limits<double>::infinity();
+      hi[c] = -lo[c];
+      for (Index i : tris[t].v) {
+        lo[c] = std::min(lo[c], soup.points[i][c]);
+        hi[c] = std::max(hi[c], soup.points[i][c]);
+      }
+      lo[c] = std::nextafter(lo[c] - grow, -std::numeric_limits<double>::infinity());
+      hi[c] = std::nextafter(hi[c] + grow, std::numeric_limits<double>::infinity());
+    }
+    face_boxes.emplace_back(lo, hi, static_cast<std::uint32_t>(t));
+  }
+  point_boxes.reserve(soup.points.size());
+  for (std::size_t v = 0; v < soup.points.size(); ++v) {
+    double p[3] = {soup.points[v][0], soup.points[v][1], soup.points[v][2]};
+    point_boxes.emplace_back(p, p, static_cast<std::uint32_t>(tris.size() + v));
+  }
+  DegenerateFlags degenerate(soup, tris);
+  CGAL::box_intersection_d(face_boxes.begin(), face_boxes.end(), point_boxes.begin(), point_boxes.end(),
+                           [&](const Box& f, const Box& p) {
+                             const FanTriangle& t = tris[f.info()];
+                             const Index v = static_cast<Index>(p.info() - tris.size());
+                             if (v == t.v[0] || v == t.v[1] || v == t.v[2] || degenerate(f.info())) return;
+                             const Point3d* x = soup.points.data();
+                             if (point_closer_than_to_triangle(x[v], x[t.v[0]], x[t.v[1]], x[t.v[2]], tol))
+                               out.push_back({v, t.face});
+                           },
+                           CGAL::Box_intersection_d::Box_traits_d<Box>(), kCutoff);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end(),
+                        [](const VertexNearFace& a, const VertexNearFace& b) {
+                          return a.vertex == b.vertex && a.face == b.face;
+                        }),
+            out.end());
+  return out;
+}
+
 std::vector<FacePair> find_flip_hazards(const Soup& soup, const std::vector<EdgeQuad>& quads, double eps,
                                         bool parallel) {
   std::vector<char> flips(quads.size(), 0);  // not coplanar (a flip changes the surface) and maybe flipped

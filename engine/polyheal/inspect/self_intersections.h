@@ -82,6 +82,22 @@ struct EdgeNearEdge {
 std::vector<EdgeNearEdge> find_edges_near_edges(const Soup& soup, const std::vector<std::array<Index, 2>>& edges,
                                                 double tol, bool parallel = true);
 
+/// A vertex closer than TetGen's shortest edge to a face it is not a corner
+/// of. With EdgeNearEdge this is every pair of simplices sharing no vertex
+/// that come that close (a segment's nearest approach to a triangle is at an
+/// end or on an edge of the triangle). Seen: a rebuilt surface folded flat
+/// on itself, one layer 1e-16 over the other, where TetGen aborts
+/// recovering a facet (formcavity).
+struct VertexNearFace {
+  Index vertex;
+  std::size_t face;
+  bool operator<(const VertexNearFace& o) const { return vertex != o.vertex ? vertex < o.vertex : face < o.face; }
+};
+
+/// Every vertex of `soup` strictly closer than `tol` to a face it is not a
+/// corner of (predicates.h point_closer_than_to_triangle), sorted.
+std::vector<VertexNearFace> find_vertices_near_faces(const Soup& soup, double tol);
+
 /// Faces (p, q, r) and (q, p, s) of a soup sharing the edge pq.
 struct EdgeQuad {
   Index p, q, r, s;

@@ -700,6 +700,7 @@ std::vector<std::pair<std::string, std::size_t>> defect_kinds(const Report& r, b
     add("vertices nearly on an edge", r.vertices_near_edges.size());
     add("vertices closer than TetGen's shortest edge", r.close_vertices.size());
     add("edges closer than TetGen's shortest edge", r.edges_near_edges.size());
+    add("vertices closer than TetGen's shortest edge to a face", r.vertices_near_faces.size());
     add("face pairs TetGen merges whose flip cuts another face", r.flip_hazards.size());
     add("refused by TetGen itself", r.tetgen_refused ? 1 : 0);
   }

@@ -2058,7 +2058,7 @@ class BoundedDecimation {
       if (!CGAL::Euler::does_satisfy_link_condition(mesh_.edge(c.h), mesh_)) continue;
       if (!near_reference(c, limit)) continue;
       if (index_.would_intersect(c.proposed, star)) continue;
-      if (leaves_vertex_near_edge(c)) continue;
+      if (leaves_vertex_near_edge(c) || leaves_near_pairs(c)) continue;
       apply(c);
       return true;
     }
@@ -2085,6 +2085,52 @@ class BoundedDecimation {
     return false;
   }
 
+  /// Would an edge of the new fan pass within TetGen's shortest edge of an
+  /// edge between two other vertices round v or u, or a vertex round them
+  /// come that close to a new triangle it is not a corner of (check
+  /// --tetgen-ready: "edge pairs" and "vertex-face pairs closer than its
+  /// shortest edge"; seen: a fan edge crossing a chord of the ring 1e-16
+  /// apart, and a ring vertex 1e-16 over a new triangle: the surface folded
+  /// flat on itself there)? The rings only, as leaves_vertex_near_edge; a
+  /// box test first.
+  bool leaves_near_pairs(const Candidate& c) const {
+    const double shortest = 1.01 * InspectOptions().tetgen_epsilon * diagonal_;
+    const vertex_descriptor v = mesh_.source(c.h), u = mesh_.target(c.h);
+    std::vector<vertex_descriptor> near;
+    for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_)) near.push_back(w);
+    for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(u), mesh_)) near.push_back(w);
+    std::sort(near.begin(), near.end());
+    near.erase(std::unique(near.begin(), near.end()), near.end());
+    auto in_near = [&](vertex_descriptor w) { return std::binary_search(near.begin(), near.end(), w); };
+    auto apart = [&](std::initializer_list<const Point3d*> x, std::initializer_list<const Point3d*> y) {
+      for (int k = 0; k < 3; ++k) {
+        double xl = HUGE_VAL, xh = -HUGE_VAL, yl = HUGE_VAL, yh = -HUGE_VAL;
+        for (const Point3d* p : x) xl = std::min(xl, (*p)[k]), xh = std::max(xh, (*p)[k]);
+        for (const Point3d* p : y) yl = std::min(yl, (*p)[k]), yh = std::max(yh, (*p)[k]);
+        if (yl - xh > shortest || xl - yh > shortest) return true;
+      }
+      return false;
+    };
+    for (vertex_descriptor w : near) {
+      if (w == u || w == v) continue;
+      for (const auto& t : c.proposed) {  // w near a new triangle
+        if (w == t[0] || w == t[1] || w == t[2]) continue;
+        const Point3d &a = at(t[0]), &b = at(t[1]), &d = at(t[2]), &p = at(w);
+        if (!apart({&a, &b, &d}, {&p}) && point_closer_than_to_triangle(p, a, b, d, shortest)) return true;
+      }
+      for (vertex_descriptor z : CGAL::vertices_around_target(mesh_.halfedge(w), mesh_)) {
+        if (z <= w || z == u || z == v || !in_near(z)) continue;  // each chord w z once
+        for (const auto& t : c.proposed)
+          for (vertex_descriptor x : {t[0], t[2]}) {  // the new edges x-u
+            if (x == w || x == z) continue;
+            const Point3d &a = at(x), &b = at(u), &p = at(w), &q = at(z);
+            if (!apart({&a, &b}, {&p, &q}) && segments_closer_than(a, b, p, q, shortest)) return true;
+          }
+      }
+    }
+    return false;
+  }
+
   /// Sharpening v onto an input edge: would it leave a face round v nearly
   /// degenerate, a vertex near one of v's edges, or v near an edge (TetGen's
   /// relative tolerance)? Vertices already moved onto the same edge are
@@ -2099,6 +2145,7 @@ class BoundedDecimation {
   /// own).
   bool sharpening_nears_tolerance(vertex_descriptor v) const {
     const double eps = InspectOptions().tetgen_epsilon;
+    const double shortest = 1.01 * eps * diagonal_;  // the written surface's bbox is about the points'
     auto box = [&](const Point3d& a, const Point3d& b, double grow) {
       return CGAL::Bbox_3(std::min(a[0], b[0]) - grow, std::min(a[1], b[1]) - grow, std::min(a[2], b[2]) - grow,
                           std::max(a[0], b[0]) + grow, std::max(a[1], b[1]) + grow, std::max(a[2], b[2]) + grow);
@@ -2107,19 +2154,41 @@ class BoundedDecimation {
     for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
       const vertex_descriptor p = mesh_.source(g), q = mesh_.target(mesh_.next(g));
       if (is_nearly_degenerate(at(p), x, at(q), eps)) return true;
-      // a vertex near the edge v p: within eps |vp| of it
+      // a vertex near the edge v p: within eps |vp| of it; an edge sharing
+      // no vertex with it within TetGen's shortest edge (check
+      // --tetgen-ready: "edge pairs closer than its shortest edge"; seen: two
+      // creases' vertices sharpened onto lines 0.075 apart on a tube's flat
+      // side, the strip's diagonals left crossing 1e-16 apart)
       const Point3d& y = at(p);
-      const double grow = 2 * eps * dist(x, y);
+      const double grow = std::max(2 * eps * dist(x, y), shortest);
       for (face_descriptor f : index_.faces_meeting(box(x, y, grow)))
+        for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_)) {
+          const vertex_descriptor a = mesh_.source(h), b = mesh_.target(h);
+          if (a != v && a != p && is_nearly_on_segment(at(a), x, y, eps)) return true;
+          if (a != v && a != p && b != v && b != p && segments_closer_than(x, y, at(a), at(b), shortest)) return true;
+        }
+      // a vertex within TetGen's shortest edge of the face v p q
+      const Point3d& z = at(q);
+      const CGAL::Bbox_3 star_face = box(x, y, shortest) + box(z, z, shortest);
+      for (face_descriptor f : index_.faces_meeting(star_face))
         for (vertex_descriptor w : CGAL::vertices_around_face(mesh_.halfedge(f), mesh_))
-          if (w != v && w != p && is_nearly_on_segment(at(w), x, y, eps)) return true;
+          if (w != v && w != p && w != q && point_closer_than_to_triangle(at(w), x, y, z, shortest)) return true;
     }
-    // v near an edge xy: within eps |xy| <= eps x the diagonal of it
-    for (face_descriptor f : index_.faces_meeting(box(x, x, 2 * eps * diagonal_)))
+    // v near an edge xy: within eps |xy| <= eps x the diagonal of it; v
+    // within TetGen's shortest edge of a face not round it
+    for (face_descriptor f : index_.faces_meeting(box(x, x, 2 * eps * diagonal_))) {
+      bool round_v = false;
       for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_)) {
         const vertex_descriptor a = mesh_.source(h), b = mesh_.target(h);
+        round_v = round_v || a == v;
         if (a != v && b != v && is_nearly_on_segment(x, at(a), at(b), eps)) return true;
       }
+      if (round_v) continue;
+      const halfedge_descriptor h = mesh_.halfedge(f);
+      if (point_closer_than_to_triangle(x, at(mesh_.source(h)), at(mesh_.target(h)), at(mesh_.target(mesh_.next(h))),
+                                        shortest))
+        return true;
+    }
     return false;
   }
 
