@@ -231,4 +231,14 @@ TEST_CASE("predicates: segment-segment and point-triangle distance tests equal e
   }
   CHECK(closer > 3000);
   CHECK(farther > 3000);
+  // A degenerate triangle (a corner repeated) counts as the segment it is.
+  for (int i = 0; i < 300; ++i) {
+    const Point3d a{u(rng), u(rng), u(rng)}, b{u(rng), u(rng), u(rng)}, p{u(rng), u(rng), u(rng)};
+    const Kernel::FT s2 = CGAL::squared_distance(kp(p), Kernel::Segment_3(kp(a), kp(b)));
+    for (double f : factors) {
+      const double t = std::sqrt(CGAL::to_double(s2)) * f;
+      INFO("degenerate case " << i << " factor " << f);
+      CHECK(point_closer_than_to_triangle(p, a, b, a, t) == (s2 < Kernel::FT(t) * Kernel::FT(t)));
+    }
+  }
 }

@@ -407,6 +407,9 @@ bool squared_distance_below(Make make, double tol) {
 
 bool point_closer_than_to_triangle(const Point3d& p, const Point3d& a, const Point3d& b, const Point3d& c, double tol) {
   if (static_point_triangle_apart(p, a, b, c, tol)) return false;
+  if (is_collinear(a, b, c))  // the segments it is
+    return segments_closer_than(p, p, a, b, tol) || segments_closer_than(p, p, b, c, tol) ||
+           segments_closer_than(p, p, c, a, tol);
   return squared_distance_below(
       [&](auto k, auto pt) {
         using K = decltype(k);

@@ -61,8 +61,8 @@ bool tetgen_keeps_edge(const Point3d& p, const Point3d& q, const Point3d& r, con
 bool segments_closer_than(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& d, double tol);
 
 /// True when point p is strictly closer than `tol` to triangle abc (exactly:
-/// squared distance < tol^2 on the doubles given). Precondition: abc not
-/// degenerate.
+/// squared distance < tol^2 on the doubles given; a degenerate abc as the
+/// segments it is).
 bool point_closer_than_to_triangle(const Point3d& p, const Point3d& a, const Point3d& b, const Point3d& c, double tol);
 
 /// True when p and q are distinct and strictly closer than `tol` (exactly:
