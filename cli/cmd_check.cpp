@@ -307,7 +307,8 @@ void add_check(CLI::App& app, int& exit_code) {
   cmd->add_flag("--list", args->list, "name the offending faces, edges, vertices and pairs");
   cmd->add_flag("--tetgen-ready", args->tetgen_ready,
                 "also require what TetGen's tolerances need (no fold below --fold-angle, no nearly degenerate "
-                "face, no vertex nearly on an edge it is not on); exit 1 otherwise");
+                "face, no vertex nearly on an edge it is not on, no two vertices, edges or vertex and face closer "
+                "than its shortest edge, no nearly flat pair whose flip cuts another face); exit 1 otherwise");
   cmd->add_option("--cap-angle", args->inspect.cap_angle, "a face with an angle above this is a cap (degrees)")
       ->default_val(175.0)->check(CLI::Range(90.0, 180.0));
   cmd->add_option("--needle-angle", args->inspect.needle_angle,

@@ -736,10 +736,12 @@ TEST_CASE("rebuild: known gap, a grid vertex left on a kept input face's plane (
   // rebuild's surface of bones has a grid vertex of valence 3 lying 1.5e-17
   // from the plane of a kept input face, inside it (check --tetgen-ready:
   // a vertex-face pair closer than TetGen's shortest edge; tetgen -pQ
-  // aborts on the surface, -pYQ meshes it). Neither the decimation's guards
-  // nor a collapse of that vertex remove it; the seam between kept faces and
-  // the grid is where to look. Marked to fail: when this passes, the gap is
-  // closed and the tag should go.
+  // aborts on the surface, -pYQ meshes it). It is the tip of a spike the grid
+  // poked through to the kept face's plane: every collapse of it would move
+  // the surface 0.06-0.10, beyond the decimation's bound (a quarter cell,
+  // 0.03), so the decimation rightly keeps it; the seam between kept faces
+  // and the grid (keep_clean_regions) is where to look. Marked to fail: when
+  // this passes, the gap is closed and the tag should go.
   const Soup in = read_soup(test::fixture("bones.off"));
   const RebuildResult result = rebuild(in);
   const Soup out = written(result, "rebuild_gap_bones.off");
