@@ -160,32 +160,28 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
       if (i != e.a && i != e.b) return i;
     return v[0];
   };
-  const double cos_fold = cos_degrees(o.tetgen_fold_angle);
-  auto sharp_fold = [&](const Topology::InteriorEdge& e) {
-    FaceView f0 = soup.face(e.face0), f1 = soup.face(e.face1);
-    if (f0.size() != 3 || f1.size() != 3 || shape[e.face0] == Shape::degenerate || shape[e.face1] == Shape::degenerate)
-      return false;
-    return fold_angle_less(soup.points[e.a], soup.points[e.b], soup.points[opposite(f0, e)],
-                           soup.points[opposite(f1, e)], cos_fold);
-  };
-  // TetGen: adjacent triangles it merges into one facet (find_flip_hazards).
-  const double cos_merge = cos_degrees(o.tetgen_facet_angle - 1e-3);
-  auto merged_quad = [&](const Topology::InteriorEdge& e, EdgeQuad& q) {
+  // Asked of two non-degenerate triangles only, as the quad (p, q, r, s):
+  // faces (p, q, r) and (q, p, s).
+  auto quad = [&](const Topology::InteriorEdge& e, EdgeQuad& q) {
     FaceView f0 = soup.face(e.face0), f1 = soup.face(e.face1);
     if (f0.size() != 3 || f1.size() != 3 || shape[e.face0] == Shape::degenerate || shape[e.face1] == Shape::degenerate)
       return false;
     q = {e.a, e.b, opposite(f0, e), opposite(f1, e), e.face0, e.face1};
-    const Point3d &p = soup.points[q.p], &a = soup.points[q.q], &r = soup.points[q.r], &s = soup.points[q.s];
-    return !fold_angle_less(p, a, r, s, cos_merge);
+    return true;
   };
+  const double cos_fold = cos_degrees(o.tetgen_fold_angle);
+  // TetGen: adjacent triangles it merges into one facet (find_flip_hazards).
+  const double cos_merge = cos_degrees(o.tetgen_facet_angle - 1e-3);
   tbb::enumerable_thread_specific<std::vector<FacePair>> folds;
   tbb::enumerable_thread_specific<std::vector<EdgeQuad>> merged;
   detail::for_each_index(topo.interior_edges.size(), o.parallel, [&](std::size_t i) {
     const Topology::InteriorEdge& e = topo.interior_edges[i];
     EdgeQuad q;
-    if (sharp_fold(e))
+    if (!quad(e, q)) return;
+    const Point3d &a = soup.points[q.p], &b = soup.points[q.q], &c = soup.points[q.r], &d = soup.points[q.s];
+    if (fold_angle_less(a, b, c, d, cos_fold))
       folds.local().push_back({std::min<std::size_t>(e.face0, e.face1), std::max<std::size_t>(e.face0, e.face1)});
-    else if (o.tetgen_segments && merged_quad(e, q))
+    else if (o.tetgen_segments && !fold_angle_less(a, b, c, d, cos_merge))
       merged.local().push_back(q);
   });
   for (const auto& v : folds) r.sharp_folds.insert(r.sharp_folds.end(), v.begin(), v.end());
@@ -222,9 +218,10 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
   // two edges closer than that, sharing no vertex, or a vertex and a face:
   // its Steiner points on them would be.
   if (o.tetgen_segments) {
-    r.close_vertices = find_close_points(soup, o.tetgen_epsilon * bbox_diagonal(r));
-    r.edges_near_edges = find_edges_near_edges(soup, edges, o.tetgen_epsilon * bbox_diagonal(r), o.parallel);
-    r.vertices_near_faces = find_vertices_near_faces(soup, o.tetgen_epsilon * bbox_diagonal(r));
+    const double shortest = o.tetgen_epsilon * bbox_diagonal(r);
+    r.close_vertices = find_close_points(soup, shortest);
+    r.edges_near_edges = find_edges_near_edges(soup, edges, shortest, o.parallel);
+    r.vertices_near_faces = find_vertices_near_faces(soup, shortest);
   }
   // About the bbox centre: the same sum for a closed surface, without the
   // cancellation of determinants ~|p|^3 far from the origin (a millimetre

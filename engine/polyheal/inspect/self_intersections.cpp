@@ -50,6 +50,32 @@ Tri exact_triangle(const Soup& s, const FanTriangle& t, bool degenerate) {
   return Tri{{point(s, t.v[0]), point(s, t.v[1]), point(s, t.v[2])}, {t.v[0], t.v[1], t.v[2]}, degenerate};
 }
 
+/// The box of points[i] for i in `ids`, grown by `grow` on every side and
+/// then rounded outward (grow 0: the points' own box, exactly).
+Box box_around(const std::vector<Point3d>& points, std::initializer_list<Index> ids, double grow, std::uint32_t id) {
+  double lo[3], hi[3];
+  for (int c = 0; c < 3; ++c) {
+    lo[c] = std::numeric_limits<double>::infinity();
+    hi[c] = -lo[c];
+    for (Index i : ids) {
+      lo[c] = std::min(lo[c], points[i][c]);
+      hi[c] = std::max(hi[c], points[i][c]);
+    }
+    if (grow > 0) {
+      lo[c] = std::nextafter(lo[c] - grow, -std::numeric_limits<double>::infinity());
+      hi[c] = std::nextafter(hi[c] + grow, std::numeric_limits<double>::infinity());
+    }
+  }
+  return Box(lo, hi, id);
+}
+
+/// Box pointers for the algorithm, which copies and reorders its input.
+std::vector<const Box*> pointers_to(const std::vector<Box>& boxes) {
+  std::vector<const Box*> pointers(boxes.size());
+  for (std::size_t i = 0; i < boxes.size(); ++i) pointers[i] = &boxes[i];
+  return pointers;
+}
+
 /// Degeneracy (exact collinearity) of each triangle, decided when a pair
 /// first needs it and kept (from any thread): a check of a few changed faces
 /// (`only`) asks it of the faces near them, not of the whole soup.
@@ -140,18 +166,10 @@ void scan(const Soup& s, const SelfIntersectionOptions& o, Found found, const st
   const DegenerateFlags degenerate(s, tris);
   std::vector<Box> boxes;
   boxes.reserve(tris.size());
-  for (std::size_t i = 0; i < tris.size(); ++i) {
-    CGAL::Bbox_3 b;
-    for (Index v : tris[i].v) {
-      const Point3d& p = s.points[v];
-      b += CGAL::Bbox_3(p[0], p[1], p[2], p[0], p[1], p[2]);
-    }
-    boxes.emplace_back(b, static_cast<std::uint32_t>(i));
-  }
+  for (std::size_t i = 0; i < tris.size(); ++i)
+    boxes.push_back(box_around(s.points, {tris[i].v[0], tris[i].v[1], tris[i].v[2]}, 0, static_cast<std::uint32_t>(i)));
   if (o.observer) o.observer->stage("self-intersections");
-  // The algorithm copies and reorders its input: give it pointers, not boxes.
-  std::vector<const Box*> pointers(boxes.size());
-  for (std::size_t i = 0; i < boxes.size(); ++i) pointers[i] = &boxes[i];
+  std::vector<const Box*> pointers = pointers_to(boxes);
   auto callback = [&](const Box* px, const Box* py) {
     const Box &x = *px, &y = *py;
     if (stop.load(std::memory_order_relaxed)) return;
@@ -214,20 +232,9 @@ void for_each_point_near_edge(const std::vector<Point3d>& points, const std::vec
                               const std::function<void(Index, std::size_t)>& near) {
   std::vector<Box> edge_boxes, point_boxes;
   edge_boxes.reserve(edges.size());
-  for (std::size_t i = 0; i < edges.size(); ++i) {
-    const Point3d &a = points[edges[i][0]], &b = points[edges[i][1]];
-    const double g = grow(i);
-    double lo[3], hi[3];
-    for (int c = 0; c < 3; ++c) {
-      lo[c] = std::nextafter(std::min(a[c], b[c]) - g, -std::numeric_limits<double>::infinity());
-      hi[c] = std::nextafter(std::max(a[c], b[c]) + g, std::numeric_limits<double>::infinity());
-    }
-    edge_boxes.emplace_back(lo, hi, static_cast<std::uint32_t>(i));
-  }
-  auto add_point = [&](Index v) {
-    double p[3] = {points[v][0], points[v][1], points[v][2]};
-    point_boxes.emplace_back(p, p, static_cast<std::uint32_t>(v));
-  };
+  for (std::size_t i = 0; i < edges.size(); ++i)
+    edge_boxes.push_back(box_around(points, {edges[i][0], edges[i][1]}, grow(i), static_cast<std::uint32_t>(i)));
+  auto add_point = [&](Index v) { point_boxes.push_back(box_around(points, {v}, 0, static_cast<std::uint32_t>(v))); };
   if (candidates) {
     point_boxes.reserve(candidates->size());
     for (Index v : *candidates) add_point(v);
@@ -249,14 +256,8 @@ std::vector<std::array<Index, 2>> find_close_points(const Soup& soup, double tol
   std::vector<Box> boxes;
   boxes.reserve(soup.points.size());
   const double half = 0.5 * tol * (1 + 1e-9);  // two boxes meet when their points are within tol on every axis
-  for (std::size_t v = 0; v < soup.points.size(); ++v) {
-    double lo[3], hi[3];
-    for (int c = 0; c < 3; ++c) {
-      lo[c] = std::nextafter(soup.points[v][c] - half, -std::numeric_limits<double>::infinity());
-      hi[c] = std::nextafter(soup.points[v][c] + half, std::numeric_limits<double>::infinity());
-    }
-    boxes.emplace_back(lo, hi, static_cast<std::uint32_t>(v));
-  }
+  for (std::size_t v = 0; v < soup.points.size(); ++v)
+    boxes.push_back(box_around(soup.points, {static_cast<Index>(v)}, half, static_cast<std::uint32_t>(v)));
   CGAL::box_self_intersection_d<CGAL::Sequential_tag>(
       boxes.begin(), boxes.end(),
       [&](const Box& p, const Box& q) {
@@ -275,17 +276,9 @@ std::vector<EdgeNearEdge> find_edges_near_edges(const Soup& soup, const std::vec
   std::vector<Box> boxes;
   boxes.reserve(edges.size());
   const double half = 0.5 * tol * (1 + 1e-9);  // two boxes meet when their segments are within tol on every axis
-  for (std::size_t i = 0; i < edges.size(); ++i) {
-    const Point3d &a = soup.points[edges[i][0]], &b = soup.points[edges[i][1]];
-    double lo[3], hi[3];
-    for (int c = 0; c < 3; ++c) {
-      lo[c] = std::nextafter(std::min(a[c], b[c]) - half, -std::numeric_limits<double>::infinity());
-      hi[c] = std::nextafter(std::max(a[c], b[c]) + half, std::numeric_limits<double>::infinity());
-    }
-    boxes.emplace_back(lo, hi, static_cast<std::uint32_t>(i));
-  }
-  std::vector<const Box*> pointers(boxes.size());
-  for (std::size_t i = 0; i < boxes.size(); ++i) pointers[i] = &boxes[i];
+  for (std::size_t i = 0; i < edges.size(); ++i)
+    boxes.push_back(box_around(soup.points, {edges[i][0], edges[i][1]}, half, static_cast<std::uint32_t>(i)));
+  std::vector<const Box*> pointers = pointers_to(boxes);
   // Most meeting boxes are of edges sharing a vertex (always meeting): the
   // broad phase is the cost, so it runs in parallel as scan()'s does.
   tbb::enumerable_thread_specific<std::vector<EdgeNearEdge>> local;
@@ -313,25 +306,13 @@ std::vector<VertexNearFace> find_vertices_near_faces(const Soup& soup, double to
   std::vector<Box> face_boxes, point_boxes;
   face_boxes.reserve(tris.size());
   const double grow = tol * (1 + 1e-9);
-  for (std::size_t t = 0; t < tris.size(); ++t) {
-    double lo[3], hi[3];
-    for (int c = 0; c < 3; ++c) {
-      lo[c] = std::numeric_limits<double>::infinity();
-      hi[c] = -lo[c];
-      for (Index i : tris[t].v) {
-        lo[c] = std::min(lo[c], soup.points[i][c]);
-        hi[c] = std::max(hi[c], soup.points[i][c]);
-      }
-      lo[c] = std::nextafter(lo[c] - grow, -std::numeric_limits<double>::infinity());
-      hi[c] = std::nextafter(hi[c] + grow, std::numeric_limits<double>::infinity());
-    }
-    face_boxes.emplace_back(lo, hi, static_cast<std::uint32_t>(t));
-  }
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    face_boxes.push_back(
+        box_around(soup.points, {tris[t].v[0], tris[t].v[1], tris[t].v[2]}, grow, static_cast<std::uint32_t>(t)));
   point_boxes.reserve(soup.points.size());
-  for (std::size_t v = 0; v < soup.points.size(); ++v) {
-    double p[3] = {soup.points[v][0], soup.points[v][1], soup.points[v][2]};
-    point_boxes.emplace_back(p, p, static_cast<std::uint32_t>(tris.size() + v));
-  }
+  for (std::size_t v = 0; v < soup.points.size(); ++v)
+    point_boxes.push_back(
+        box_around(soup.points, {static_cast<Index>(v)}, 0, static_cast<std::uint32_t>(tris.size() + v)));
   DegenerateFlags degenerate(soup, tris);
   CGAL::box_intersection_d(face_boxes.begin(), face_boxes.end(), point_boxes.begin(), point_boxes.end(),
                            [&](const Box& f, const Box& p) {
@@ -368,28 +349,18 @@ std::vector<FacePair> find_flip_hazards(const Soup& soup, const std::vector<Edge
   std::vector<FacePair> out;
   if (bent.empty()) return out;
   const std::vector<FanTriangle> tris = fan_triangles(soup);
-  auto box_of = [&](std::initializer_list<Index> v, std::uint32_t id) {
-    double lo[3], hi[3];
-    for (int c = 0; c < 3; ++c) {
-      lo[c] = std::numeric_limits<double>::infinity();
-      hi[c] = -lo[c];
-      for (Index i : v) {
-        lo[c] = std::min(lo[c], soup.points[i][c]);
-        hi[c] = std::max(hi[c], soup.points[i][c]);
-      }
-    }
-    return Box(lo, hi, id);
-  };
   std::vector<Box> face_boxes, flip_boxes;
   face_boxes.reserve(tris.size());
   for (std::size_t t = 0; t < tris.size(); ++t)
-    face_boxes.push_back(box_of({tris[t].v[0], tris[t].v[1], tris[t].v[2]}, static_cast<std::uint32_t>(t)));
+    face_boxes.push_back(
+        box_around(soup.points, {tris[t].v[0], tris[t].v[1], tris[t].v[2]}, 0, static_cast<std::uint32_t>(t)));
   // The flipped triangles: (r, s, p) and (s, r, q) of quad k are 2k, 2k + 1.
   std::vector<Tri> flipped;
   flipped.reserve(2 * bent.size());
   for (const EdgeQuad& e : bent) {
     for (const auto& v : {std::array<Index, 3>{e.r, e.s, e.p}, std::array<Index, 3>{e.s, e.r, e.q}}) {
-      flip_boxes.push_back(box_of({v[0], v[1], v[2]}, static_cast<std::uint32_t>(tris.size() + flipped.size())));
+      flip_boxes.push_back(
+          box_around(soup.points, {v[0], v[1], v[2]}, 0, static_cast<std::uint32_t>(tris.size() + flipped.size())));
       flipped.push_back(detail::make_tri<InputKernel>(point(soup, v[0]), point(soup, v[1]), point(soup, v[2]), v[0],
                                                       v[1], v[2]));
     }
@@ -405,9 +376,7 @@ std::vector<FacePair> find_flip_hazards(const Soup& soup, const std::vector<Edge
   // Each half of the flipped triangles against all faces (each task its own
   // copy of the face pointers: box_intersection_d reorders them); a quad's
   // two triangles stay in one half, so hazard[k] has one writer.
-  std::vector<const Box*> faces_a(face_boxes.size()), flips_a(flip_boxes.size());
-  for (std::size_t i = 0; i < face_boxes.size(); ++i) faces_a[i] = &face_boxes[i];
-  for (std::size_t i = 0; i < flip_boxes.size(); ++i) flips_a[i] = &flip_boxes[i];
+  std::vector<const Box*> faces_a = pointers_to(face_boxes), flips_a = pointers_to(flip_boxes);
   auto against_faces = [&](std::vector<const Box*>& flips, std::vector<const Box*>& faces) {
     CGAL::box_intersection_d<CGAL::Sequential_tag>(flips.begin(), flips.end(), faces.begin(), faces.end(), found,
                                                    Traits(), kCutoff);

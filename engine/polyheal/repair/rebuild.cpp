@@ -2085,6 +2085,11 @@ class BoundedDecimation {
     return false;
   }
 
+  /// TetGen's shortest edge (its relative tolerance times the bbox
+  /// diagonal), a little longer: the written surface's bbox is about the
+  /// points'.
+  double tetgen_shortest_edge() const { return 1.01 * InspectOptions().tetgen_epsilon * diagonal_; }
+
   /// Would an edge of the new fan pass within TetGen's shortest edge of an
   /// edge between two other vertices round v or u, or a vertex round them
   /// come that close to a new triangle it is not a corner of (check
@@ -2094,7 +2099,7 @@ class BoundedDecimation {
   /// flat on itself there)? The rings only, as leaves_vertex_near_edge; a
   /// box test first.
   bool leaves_near_pairs(const Candidate& c) const {
-    const double shortest = 1.01 * InspectOptions().tetgen_epsilon * diagonal_;
+    const double shortest = tetgen_shortest_edge();
     const vertex_descriptor v = mesh_.source(c.h), u = mesh_.target(c.h);
     std::vector<vertex_descriptor> near;
     for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_)) near.push_back(w);
@@ -2145,7 +2150,7 @@ class BoundedDecimation {
   /// own).
   bool sharpening_nears_tolerance(vertex_descriptor v) const {
     const double eps = InspectOptions().tetgen_epsilon;
-    const double shortest = 1.01 * eps * diagonal_;  // the written surface's bbox is about the points'
+    const double shortest = tetgen_shortest_edge();
     auto box = [&](const Point3d& a, const Point3d& b, double grow) {
       return CGAL::Bbox_3(std::min(a[0], b[0]) - grow, std::min(a[1], b[1]) - grow, std::min(a[2], b[2]) - grow,
                           std::max(a[0], b[0]) + grow, std::max(a[1], b[1]) + grow, std::max(a[2], b[2]) + grow);
