@@ -2,6 +2,8 @@
 // fixtures, and the parallel pass against the sequential one.
 #include <catch2/catch.hpp>
 
+#include <set>
+
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 
 #include "polyheal/inspect/report.h"
@@ -83,5 +85,57 @@ TEST_CASE("self_intersections: a check of flagged faces finds exactly the pairs 
     CHECK(find_self_intersections(s, o) == expected);
     CHECK(does_self_intersect(s, o));
     CHECK(flagged > 0);
+  }
+}
+
+TEST_CASE("self_intersections: the near-simplex searches of flagged faces find exactly the pairs that touch one",
+          "[inspect]") {
+  // At 0.2% of the diagonal mannequin-devil has thousands of vertex-face and
+  // edge pairs closer than that; the searches restricted to flagged faces
+  // (rebuild's check of a zip) must find what the full ones find among the
+  // pairs whose face is flagged or whose vertex is a corner of one (vertex-
+  // face), or with a flagged edge (edge pairs), by direct box tests (few
+  // flagged) and through the segment tree (many).
+  const Soup s = read_soup(test::fixture("mannequin-devil.off"));
+  const double tol = 0.002 * bbox_diagonal(inspect(s));
+  const std::vector<VertexNearFace> all_vf = find_vertices_near_faces(s, tol);
+  std::vector<std::array<Index, 2>> edges;
+  std::vector<std::size_t> face_of_edge;
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    const FaceView v = s.face(f);
+    for (int k = 0; k < 3; ++k) {
+      edges.push_back({v[k], v[(k + 1) % 3]});  // each edge twice (once per face): pairs of either copy
+      face_of_edge.push_back(f);
+    }
+  }
+  const std::vector<EdgeNearEdge> all_ee = find_edges_near_edges(s, edges, tol);
+  REQUIRE(all_vf.size() > 1000);
+  REQUIRE(all_ee.size() > 1000);
+  for (const std::size_t stride : {std::size_t(5), std::size_t(3000)}) {
+    INFO("every " << stride << "th face flagged");
+    std::vector<char> only(s.face_count(), 0), corner(s.points.size(), 0), flagged_edge(edges.size(), 0);
+    for (std::size_t f = stride / 2; f < s.face_count(); f += stride) only[f] = 1;
+    for (std::size_t i = 0; i < edges.size(); ++i)
+      if (only[face_of_edge[i]]) flagged_edge[i] = corner[edges[i][0]] = corner[edges[i][1]] = 1;
+    std::vector<VertexNearFace> expected_vf;
+    for (const VertexNearFace& p : all_vf)
+      if (only[p.face] || corner[p.vertex]) expected_vf.push_back(p);
+    const std::vector<VertexNearFace> vf = find_vertices_near_faces(s, tol, &only);
+    REQUIRE(vf.size() == expected_vf.size());
+    for (std::size_t i = 0; i < vf.size(); ++i) {
+      CHECK(vf[i].vertex == expected_vf[i].vertex);
+      CHECK(vf[i].face == expected_vf[i].face);
+    }
+    // An edge pair is named by its sorted ends: flagged when either copy of
+    // either edge is.
+    std::set<std::array<Index, 2>> flagged_ends;
+    for (std::size_t i = 0; i < edges.size(); ++i)
+      if (flagged_edge[i]) flagged_ends.insert({std::min(edges[i][0], edges[i][1]), std::max(edges[i][0], edges[i][1])});
+    std::vector<EdgeNearEdge> expected_ee;
+    for (const EdgeNearEdge& p : all_ee)
+      if (flagged_ends.count(p.e) || flagged_ends.count(p.f)) expected_ee.push_back(p);
+    CHECK(find_edges_near_edges(s, edges, tol, true, &flagged_edge) == expected_ee);
+    CHECK(!expected_vf.empty());
+    CHECK(!expected_ee.empty());
   }
 }

@@ -732,24 +732,34 @@ TEST_CASE("rebuild: rounded crossings on one straight line make no slivers TetGe
   }
 }
 
-TEST_CASE("rebuild: known gap, a grid vertex left on a kept input face's plane (bones)", "[rebuild][!shouldfail]") {
-  // rebuild's surface of bones has a grid vertex of valence 3 lying 1.5e-17
-  // from the plane of a kept input face, inside it (check --tetgen-ready:
-  // a vertex-face pair closer than TetGen's shortest edge; tetgen -pQ
-  // aborts on the surface, -pYQ meshes it). It is the tip of a spike the grid
-  // poked through to the kept face's plane: every collapse of it would move
-  // the surface 0.06-0.10, beyond the decimation's bound (a quarter cell,
-  // 0.03), so the decimation rightly keeps it; the seam between kept faces
-  // and the grid (keep_clean_regions) is where to look. Marked to fail: when
-  // this passes, the gap is closed and the tag should go.
-  const Soup in = read_soup(test::fixture("bones.off"));
-  const RebuildResult result = rebuild(in);
-  const Soup out = written(result, "rebuild_gap_bones.off");
-  InspectOptions io;
-  io.tetgen_segments = true;
-  const Report rep = inspect(out, io);
-  REQUIRE(rep.certified_clean());
-  CHECK(rep.vertices_near_faces.empty());
+TEST_CASE("rebuild: no grid vertex is left within TetGen's shortest edge of a kept input face", "[rebuild][tetgen]") {
+  // The grid surface of a part thinner than a cell, on the far side of a
+  // kept input face, has its vertices on that face's crossings: on bones and
+  // on hornbug one was left 1e-17 off the kept face, the tip of a spike every
+  // collapse of which moves the surface beyond the decimation's bound (check
+  // --tetgen-ready: a vertex-face pair closer than TetGen's shortest edge;
+  // tetgen -pQ aborts on those surfaces, -pYQ meshes them). The zip now
+  // treats simplices of kept and strip faces that close to others as it
+  // treats intersections (the hole widens there, else the patch shrinks).
+  // Both still keep input faces, so the seam is at stake.
+  for (const char* name : {"bones.off", "corpus/vhacd__hornbug.off"}) {
+    INFO(name);
+    const Soup in = read_soup(test::fixture(name));
+    const RebuildResult result = rebuild(in);
+    REQUIRE(result.report.kept_faces > 0);
+    const std::string out_name = std::string("rebuild_seam_") + (name[0] == 'b' ? "bones" : "hornbug") + ".off";
+    const std::string path = test::scratch(out_name);
+    write_soup(result.soup, path);
+    const Soup out = read_soup(path);
+    InspectOptions io;
+    io.tetgen_segments = true;
+    const Report rep = inspect(out, io);
+    REQUIRE(rep.certified_clean());
+    CHECK(rep.vertices_near_faces.empty());
+    CHECK(rep.edges_near_edges.empty());
+    CHECK(rep.tetgen_ready());
+    CHECK(test::tetgen_meshes(path, "tet_" + out_name, "-pQ"));  // without -Y: TetGen may change the surface
+  }
 }
 
 TEST_CASE("loss measure: on a certified surface the pseudo-normal inside test agrees with the winding number",

@@ -158,6 +158,30 @@ void box_pairs(std::vector<const Box*>& boxes, const Callback& callback, int dep
       });
 }
 
+/// Every overlapping pair of a `flagged` box with one of `others` through
+/// `callback(flagged, other)` (a box in both is paired with itself; a pair of
+/// two flagged boxes comes twice). Only boxes meeting the flagged ones' union
+/// can pair with one; a few flagged boxes (an edit's) are paired by direct
+/// box tests: sorting the whole soup's boxes for them cost more than the tests
+/// (rebuild's clean-region rounds: 38 checks of ~10 faces against 100k).
+template <class Callback>
+void flagged_pairs(std::vector<const Box*>& flagged, const std::vector<const Box*>& others, const Callback& callback) {
+  if (flagged.empty()) return;
+  CGAL::Bbox_3 reach;
+  for (const Box* b : flagged) reach += b->bbox();
+  std::vector<const Box*> near;
+  for (const Box* b : others)
+    if (CGAL::do_overlap(b->bbox(), reach)) near.push_back(b);
+  if (flagged.size() * near.size() <= kDirectPairs) {
+    for (const Box* x : flagged)
+      for (const Box* y : near)
+        if (CGAL::do_overlap(x->bbox(), y->bbox())) callback(x, y);
+    return;
+  }
+  CGAL::box_intersection_d<CGAL::Sequential_tag>(flagged.begin(), flagged.end(), near.begin(), near.end(), callback,
+                                                 Traits(), kCutoff);
+}
+
 /// Runs the broad phase and calls `found(a, b)` for each intersecting pair of
 /// fan triangles (from any thread). `stop` ends the search early.
 template <class Found>
@@ -180,28 +204,12 @@ void scan(const Soup& s, const SelfIntersectionOptions& o, Found found, const st
       found(a.face, b.face);
   };
   if (o.only) {
-    // Only boxes meeting the flagged ones' union can pair with one; a few
-    // flagged faces (an edit's) are paired by direct box tests: sorting the
-    // whole soup's boxes for them cost more than the tests (rebuild's
-    // clean-region rounds: 38 checks of ~10 faces against 100k).
-    std::vector<const Box*> flagged, near;
-    CGAL::Bbox_3 reach;
+    std::vector<const Box*> flagged;
     for (const Box* b : pointers)
-      if ((*o.only)[tris[b->info()].face]) {
-        flagged.push_back(b);
-        reach += b->bbox();
-      }
-    if (flagged.empty()) return;
-    for (const Box* b : pointers)
-      if (CGAL::do_overlap(b->bbox(), reach)) near.push_back(b);
-    if (flagged.size() * near.size() <= kDirectPairs) {
-      for (const Box* x : flagged)
-        for (const Box* y : near)
-          if (x != y && CGAL::do_overlap(x->bbox(), y->bbox())) callback(x, y);
-      return;
-    }
-    CGAL::box_intersection_d<CGAL::Sequential_tag>(flagged.begin(), flagged.end(), near.begin(), near.end(), callback,
-                                                   Traits(), kCutoff);
+      if ((*o.only)[tris[b->info()].face]) flagged.push_back(b);
+    flagged_pairs(flagged, pointers, [&](const Box* x, const Box* y) {
+      if (x != y) callback(x, y);
+    });
     return;
   }
   box_pairs(pointers, callback, o.parallel ? 2 : 0);  // 2 levels: 4 leaves, enough to balance 2 cores
@@ -270,7 +278,7 @@ std::vector<std::array<Index, 2>> find_close_points(const Soup& soup, double tol
 }
 
 std::vector<EdgeNearEdge> find_edges_near_edges(const Soup& soup, const std::vector<std::array<Index, 2>>& edges,
-                                                double tol, bool parallel) {
+                                                double tol, bool parallel, const std::vector<char>* only) {
   std::vector<EdgeNearEdge> out;
   if (!(tol > 0)) return out;
   std::vector<Box> boxes;
@@ -279,27 +287,33 @@ std::vector<EdgeNearEdge> find_edges_near_edges(const Soup& soup, const std::vec
   for (std::size_t i = 0; i < edges.size(); ++i)
     boxes.push_back(box_around(soup.points, {edges[i][0], edges[i][1]}, half, static_cast<std::uint32_t>(i)));
   std::vector<const Box*> pointers = pointers_to(boxes);
-  // Most meeting boxes are of edges sharing a vertex (always meeting): the
-  // broad phase is the cost, so it runs in parallel as scan()'s does.
   tbb::enumerable_thread_specific<std::vector<EdgeNearEdge>> local;
-  box_pairs(
-      pointers,
-      [&](const Box* x, const Box* y) {
-        std::array<Index, 2> e = edges[x->info()], f = edges[y->info()];
-        if (e[0] == f[0] || e[0] == f[1] || e[1] == f[0] || e[1] == f[1]) return;
-        const Point3d* p = soup.points.data();
-        if (!segments_closer_than(p[e[0]], p[e[1]], p[f[0]], p[f[1]], tol)) return;
-        if (e[0] > e[1]) std::swap(e[0], e[1]);
-        if (f[0] > f[1]) std::swap(f[0], f[1]);
-        local.local().push_back(e < f ? EdgeNearEdge{e, f} : EdgeNearEdge{f, e});
-      },
-      parallel ? 2 : 0);
+  auto near = [&](const Box* x, const Box* y) {
+    std::array<Index, 2> e = edges[x->info()], f = edges[y->info()];
+    if (e[0] == f[0] || e[0] == f[1] || e[1] == f[0] || e[1] == f[1]) return;
+    const Point3d* p = soup.points.data();
+    if (!segments_closer_than(p[e[0]], p[e[1]], p[f[0]], p[f[1]], tol)) return;
+    if (e[0] > e[1]) std::swap(e[0], e[1]);
+    if (f[0] > f[1]) std::swap(f[0], f[1]);
+    local.local().push_back(e < f ? EdgeNearEdge{e, f} : EdgeNearEdge{f, e});
+  };
+  if (only) {
+    std::vector<const Box*> flagged;
+    for (const Box* b : pointers)
+      if ((*only)[b->info()]) flagged.push_back(b);
+    flagged_pairs(flagged, pointers, near);
+  } else {
+    // Most meeting boxes are of edges sharing a vertex (always meeting): the
+    // broad phase is the cost, so it runs in parallel as scan()'s does.
+    box_pairs(pointers, near, parallel ? 2 : 0);
+  }
   for (const auto& v : local) out.insert(out.end(), v.begin(), v.end());
   std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());  // two flagged edges: found both ways
   return out;
 }
 
-std::vector<VertexNearFace> find_vertices_near_faces(const Soup& soup, double tol) {
+std::vector<VertexNearFace> find_vertices_near_faces(const Soup& soup, double tol, const std::vector<char>* only) {
   std::vector<VertexNearFace> out;
   if (!(tol > 0)) return out;
   const std::vector<FanTriangle> tris = fan_triangles(soup);
@@ -314,16 +328,33 @@ std::vector<VertexNearFace> find_vertices_near_faces(const Soup& soup, double to
     point_boxes.push_back(
         box_around(soup.points, {static_cast<Index>(v)}, 0, static_cast<std::uint32_t>(tris.size() + v)));
   DegenerateFlags degenerate(soup, tris);
-  CGAL::box_intersection_d(face_boxes.begin(), face_boxes.end(), point_boxes.begin(), point_boxes.end(),
-                           [&](const Box& f, const Box& p) {
-                             const FanTriangle& t = tris[f.info()];
-                             const Index v = static_cast<Index>(p.info() - tris.size());
-                             if (v == t.v[0] || v == t.v[1] || v == t.v[2] || degenerate(f.info())) return;
-                             const Point3d* x = soup.points.data();
-                             if (point_closer_than_to_triangle(x[v], x[t.v[0]], x[t.v[1]], x[t.v[2]], tol))
-                               out.push_back({v, t.face});
-                           },
-                           CGAL::Box_intersection_d::Box_traits_d<Box>(), kCutoff);
+  auto near = [&](const Box* f, const Box* p) {
+    const FanTriangle& t = tris[f->info()];
+    const Index v = static_cast<Index>(p->info() - tris.size());
+    if (v == t.v[0] || v == t.v[1] || v == t.v[2] || degenerate(f->info())) return;
+    const Point3d* x = soup.points.data();
+    if (point_closer_than_to_triangle(x[v], x[t.v[0]], x[t.v[1]], x[t.v[2]], tol)) out.push_back({v, t.face});
+  };
+  if (only) {
+    // A flagged face against every point, every face against a flagged
+    // face's corners.
+    std::vector<const Box*> faces = pointers_to(face_boxes), points = pointers_to(point_boxes), flagged_faces,
+                            flagged_points;
+    std::vector<char> corner(soup.points.size(), 0);
+    for (const Box* b : faces)
+      if ((*only)[tris[b->info()].face]) {
+        flagged_faces.push_back(b);
+        for (Index v : tris[b->info()].v) corner[v] = 1;
+      }
+    for (const Box* b : points)
+      if (corner[b->info() - tris.size()]) flagged_points.push_back(b);
+    flagged_pairs(flagged_faces, points, near);
+    flagged_pairs(flagged_points, faces, [&](const Box* p, const Box* f) { near(f, p); });
+  } else {
+    CGAL::box_intersection_d(face_boxes.begin(), face_boxes.end(), point_boxes.begin(), point_boxes.end(),
+                             [&](const Box& f, const Box& p) { near(&f, &p); },
+                             CGAL::Box_intersection_d::Box_traits_d<Box>(), kCutoff);
+  }
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end(),
                         [](const VertexNearFace& a, const VertexNearFace& b) {

@@ -74,13 +74,15 @@ std::vector<std::array<Index, 2>> find_close_points(const Soup& soup, double tol
 struct EdgeNearEdge {
   std::array<Index, 2> e, f;  // e < f
   bool operator<(const EdgeNearEdge& o) const { return e != o.e ? e < o.e : f < o.f; }
+  bool operator==(const EdgeNearEdge& o) const { return e == o.e && f == o.f; }
 };
 
 /// Every pair of `edges` sharing no vertex that are strictly closer than
 /// `tol` (predicates.h segments_closer_than), sorted. `parallel`: TBB in the
-/// broad phase.
+/// broad phase. `only` (one flag per edge): only pairs with a flagged edge.
 std::vector<EdgeNearEdge> find_edges_near_edges(const Soup& soup, const std::vector<std::array<Index, 2>>& edges,
-                                                double tol, bool parallel = true);
+                                                double tol, bool parallel = true,
+                                                const std::vector<char>* only = nullptr);
 
 /// A vertex closer than TetGen's shortest edge to a face it is not a corner
 /// of. With EdgeNearEdge this is every pair of simplices sharing no vertex
@@ -95,8 +97,11 @@ struct VertexNearFace {
 };
 
 /// Every vertex of `soup` strictly closer than `tol` to a face it is not a
-/// corner of (predicates.h point_closer_than_to_triangle), sorted.
-std::vector<VertexNearFace> find_vertices_near_faces(const Soup& soup, double tol);
+/// corner of (predicates.h point_closer_than_to_triangle), sorted. `only`
+/// (one flag per face): only pairs whose face is flagged or whose vertex is
+/// a corner of a flagged face (the check of an edit that changed those).
+std::vector<VertexNearFace> find_vertices_near_faces(const Soup& soup, double tol,
+                                                     const std::vector<char>* only = nullptr);
 
 /// Faces (p, q, r) and (q, p, s) of a soup sharing the edge pq.
 struct EdgeQuad {

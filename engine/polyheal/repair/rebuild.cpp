@@ -827,6 +827,56 @@ bool trace_loops(const std::vector<std::array<Index, 2>>& edges, std::vector<std
   return true;
 }
 
+/// The pairs of simplices of the joined surface closer than TetGen's shortest
+/// edge `tol` (check --tetgen-ready: a vertex and a face it is not a corner
+/// of, two edges sharing no vertex) where one is of a kept or strip face
+/// (`patch` >= 0; the grid is trusted), as pairs of faces (a face of each
+/// simplex, one of them kept or strip), sorted. Seen on bones and hornbug:
+/// the grid surface of a part thinner than a cell, on the far side of a kept
+/// face, has its vertices on that face's crossings, one of them 1e-17 off
+/// the kept face (tetgen -pQ aborts). `first`/`around`: the faces round each
+/// vertex (offsets by vertex).
+std::vector<FacePair> near_pairs_at_seam(const Soup& joined, const std::vector<Tri>& tris,
+                                         const std::vector<std::int64_t>& patch, const std::vector<std::uint32_t>& first,
+                                         const std::vector<std::uint32_t>& around, double tol) {
+  std::vector<FacePair> out;
+  auto add = [&](std::uint32_t s, std::uint32_t t) {
+    if (s != t && (patch[s] >= 0 || patch[t] >= 0)) out.push_back({std::min<std::size_t>(s, t), std::max<std::size_t>(s, t)});
+  };
+  std::vector<char> seam(tris.size(), 0);
+  for (std::size_t t = 0; t < tris.size(); ++t) seam[t] = patch[t] >= 0;
+  for (const VertexNearFace& p : find_vertices_near_faces(joined, tol, &seam))
+    for (std::uint32_t i = first[p.vertex]; i < first[p.vertex + 1]; ++i) add(around[i], std::uint32_t(p.face));
+  // The faces of edge e (closed and oriented: two).
+  auto faces_of = [&](const std::array<Index, 2>& e, std::uint32_t of[2]) {
+    int n = 0;
+    for (std::uint32_t i = first[e[0]]; i < first[e[0] + 1] && n < 2; ++i) {
+      const Tri& t = tris[around[i]];
+      if (t[0] == e[1] || t[1] == e[1] || t[2] == e[1]) of[n++] = around[i];
+    }
+    return n;
+  };
+  std::vector<std::array<Index, 2>> edges;
+  std::vector<char> seam_edge;
+  for (const Tri& t : tris)
+    for (int k = 0; k < 3; ++k)
+      if (t[k] < t[(k + 1) % 3]) {  // each edge once
+        edges.push_back({t[k], t[(k + 1) % 3]});
+        std::uint32_t f[2];
+        const int n = faces_of(edges.back(), f);
+        seam_edge.push_back(std::any_of(f, f + n, [&](std::uint32_t g) { return seam[g] != 0; }));
+      }
+  for (const EdgeNearEdge& p : find_edges_near_edges(joined, edges, tol, false, &seam_edge)) {
+    std::uint32_t a[2], b[2];
+    const int m = faces_of(p.e, a), n = faces_of(p.f, b);
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j < n; ++j) add(a[i], b[j]);
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
 KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, double h,
                                std::vector<OutVertex>& vertices, std::vector<Tri>& tris) {
   KeptRegions kept;
@@ -909,6 +959,18 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
   // No facet to keep (the tubes, most soups): the grid surface as it is,
   // without indexing its half-million faces for the patches below.
   if (std::find(ok.begin(), ok.end(), 1) == ok.end()) return kept;
+  // TetGen's shortest edge on the joined surface (its bbox is the grid
+  // surface's, within the decimation's bound; twice, for that margin).
+  double shortest_edge = 0;
+  {
+    Point3d lo = vertices[0].p, hi = vertices[0].p;
+    for (const OutVertex& v : vertices)
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = std::min(lo[k], v.p[k]);
+        hi[k] = std::max(hi[k], v.p[k]);
+      }
+    shortest_edge = 2 * InspectOptions().tetgen_epsilon * dist(lo, hi);
+  }
   // The grid surface: vertex normals, halfedges, points, stars.
   std::vector<Point3d> vnormal(vertices.size(), Point3d{0, 0, 0});
   for (const Tri& t : tris) {
@@ -931,9 +993,10 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
   std::vector<std::vector<std::uint32_t>> grid_star(vertices.size());
   for (std::size_t t = 0; t < tris.size(); ++t)
     for (Index v : tris[t]) grid_star[v].push_back(static_cast<std::uint32_t>(t));
-  // Where a kept facet or a strip intersects something, the patch shrinks
-  // there (the kept facets around the offending corners are let go) and is
-  // joined again; after kShrinks attempts such a patch is given up whole.
+  // Where a kept facet or a strip intersects something (or comes closer to
+  // it than TetGen's shortest edge), the patch shrinks there (the kept
+  // facets around the offending corners are let go) and is joined again;
+  // after kShrinks attempts such a patch is given up whole.
   constexpr int kShrinks = 8;
   // The exact check of the joined surface, across rounds and attempts: a
   // face is named by its corners (input point or grid vertex), so a pair of
@@ -1361,7 +1424,8 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
       const bool stalled = removed == last_removed && give_up == last_give_up;
       last_removed = removed;
       last_give_up = give_up;
-      // Exactly: no kept or strip face may intersect anything.
+      // Exactly: no kept or strip face may intersect anything, nor come
+      // within TetGen's shortest edge of it.
       Soup joined;
       for (const OutVertex& v : out_vertices) joined.points.push_back(v.p);
       for (const Tri& t : out_tris) joined.add_triangle(t[0], t[1], t[2]);
@@ -1446,6 +1510,13 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
                 bad.push_back({std::min(t, std::size_t(o)), std::max(t, std::size_t(o))});
             }
           }
+        }
+        if (bad.empty()) {
+          // Nothing intersects: simplices of kept or strip faces closer than
+          // TetGen's shortest edge to others. Asked of the surface the
+          // mending has settled (the zips of earlier rounds come closer
+          // than that in many places the widening then takes away anyway).
+          bad = near_pairs_at_seam(joined, out_tris, out_patch, first, around, shortest_edge);
         }
         // Mended first (the hole widens, by grid faces within two cells of
         // the patch: strips stay short, near the surface), all at once; the
