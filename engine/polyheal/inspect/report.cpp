@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <numeric>
 #include <set>
@@ -186,21 +187,6 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
   });
   for (const auto& v : folds) r.sharp_folds.insert(r.sharp_folds.end(), v.begin(), v.end());
   std::sort(r.sharp_folds.begin(), r.sharp_folds.end());
-  if (o.tetgen_segments) {
-    std::vector<EdgeQuad> quads;
-    for (const auto& v : merged) quads.insert(quads.end(), v.begin(), v.end());
-    r.flip_hazards = find_flip_hazards(soup, quads, o.tetgen_epsilon, o.parallel);
-  }
-
-  // TetGen: a vertex within its tolerance of an edge it is not on.
-  std::vector<std::array<Index, 2>> edges;
-  if (o.tetgen_segments) {
-    r.vertices_near_edges_checked = true;
-    edges.reserve(topo.interior_edges.size() + topo.boundary_edges.size());
-    for (const Topology::InteriorEdge& e : topo.interior_edges) edges.push_back({e.a, e.b});
-    for (const Edge& e : topo.boundary_edges) edges.push_back({e.a, e.b});
-    r.vertices_near_edges = find_vertices_near_edges(soup, edges, o.tetgen_epsilon);
-  }
 
   // Bounding box and signed volume (a measurement, not a predicate).
   r.bbox_min = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
@@ -213,15 +199,33 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
     }
   if (soup.points.empty()) r.bbox_min = r.bbox_max = {0, 0, 0};
 
-  // TetGen: two points closer than its shortest edge (-T times the bbox
-  // diagonal, its 'minedgelength') become one.
-  // two edges closer than that, sharing no vertex, or a vertex and a face:
-  // its Steiner points on them would be.
   if (o.tetgen_segments) {
+    std::vector<EdgeQuad> quads;
+    for (const auto& v : merged) quads.insert(quads.end(), v.begin(), v.end());
+    r.vertices_near_edges_checked = true;
+    std::vector<std::array<Index, 2>> edges;
+    edges.reserve(topo.interior_edges.size() + topo.boundary_edges.size());
+    for (const Topology::InteriorEdge& e : topo.interior_edges) edges.push_back({e.a, e.b});
+    for (const Edge& e : topo.boundary_edges) edges.push_back({e.a, e.b});
     const double shortest = o.tetgen_epsilon * bbox_diagonal(r);
-    r.close_vertices = find_close_points(soup, shortest);
-    r.edges_near_edges = find_edges_near_edges(soup, edges, shortest, o.parallel);
-    r.vertices_near_faces = find_vertices_near_faces(soup, shortest);
+    // Independent searches, as tasks: most of them are sequential inside,
+    // and the self-intersection pass beside this one ends first
+    // (torus_knot_1M: 3.9 s of them one after another).
+    const std::function<void()> searches[] = {
+        [&] { r.flip_hazards = find_flip_hazards(soup, quads, o.tetgen_epsilon, o.parallel); },
+        // a vertex within its tolerance of an edge it is not on
+        [&] { r.vertices_near_edges = find_vertices_near_edges(soup, edges, o.tetgen_epsilon); },
+        // two points closer than its shortest edge (-T times the bbox
+        // diagonal, its 'minedgelength') become one
+        [&] { r.close_vertices = find_close_points(soup, shortest); },
+        // two edges closer than that, sharing no vertex, or a vertex and a
+        // face: its Steiner points on them would be
+        [&] { r.edges_near_edges = find_edges_near_edges(soup, edges, shortest, o.parallel); },
+        [&] { r.vertices_near_faces = find_vertices_near_faces(soup, shortest); },
+    };
+    if (o.parallel) tbb::parallel_invoke(searches[0], searches[1], searches[2], searches[3], searches[4]);
+    else
+      for (const auto& search : searches) search();
   }
   // About the bbox centre: the same sum for a closed surface, without the
   // cancellation of determinants ~|p|^3 far from the origin (a millimetre
