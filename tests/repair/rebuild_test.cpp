@@ -35,6 +35,24 @@ Soup written(const RebuildResult& result, const std::string& name) {
   return read_soup(p);
 }
 
+/// Writes the output to scratch(`name`) and checks the file as read back is
+/// certified and TetGen-ready (no simplices closer than TetGen's tolerances)
+/// and that `tetgen -pQ` meshes it (without -Y: TetGen may change the
+/// surface, where its tolerances bite).
+void check_tetgen_ready(const RebuildResult& result, const std::string& name) {
+  const std::string path = test::scratch(name);
+  write_soup(result.soup, path);
+  InspectOptions io;
+  io.tetgen_segments = true;
+  const Report rep = inspect(read_soup(path), io);
+  REQUIRE(rep.certified_clean());
+  CHECK(rep.vertices_near_edges.empty());
+  CHECK(rep.vertices_near_faces.empty());
+  CHECK(rep.edges_near_edges.empty());
+  CHECK(rep.tetgen_ready());
+  CHECK(test::tetgen_meshes(path, "tet_" + name, "-pQ"));
+}
+
 /// The checks every rebuilt solid passes, on the written file.
 void check_solid(const Soup& input, const Soup& out, const RebuildReport& r, std::size_t components, long euler) {
   const Report rep = inspect(out);
@@ -747,18 +765,30 @@ TEST_CASE("rebuild: no grid vertex is left within TetGen's shortest edge of a ke
     const Soup in = read_soup(test::fixture(name));
     const RebuildResult result = rebuild(in);
     REQUIRE(result.report.kept_faces > 0);
-    const std::string out_name = std::string("rebuild_seam_") + (name[0] == 'b' ? "bones" : "hornbug") + ".off";
-    const std::string path = test::scratch(out_name);
-    write_soup(result.soup, path);
-    const Soup out = read_soup(path);
-    InspectOptions io;
-    io.tetgen_segments = true;
-    const Report rep = inspect(out, io);
-    REQUIRE(rep.certified_clean());
-    CHECK(rep.vertices_near_faces.empty());
-    CHECK(rep.edges_near_edges.empty());
-    CHECK(rep.tetgen_ready());
-    CHECK(test::tetgen_meshes(path, "tet_" + out_name, "-pQ"));  // without -Y: TetGen may change the surface
+    check_tetgen_ready(result, std::string("rebuild_seam_") + (name[0] == 'b' ? "bones" : "hornbug") + ".off");
+  }
+}
+
+TEST_CASE("rebuild: a model far from the origin comes out TetGen-ready", "[rebuild][tetgen]") {
+  // Soups moved by (1e6, -2e6, 3e5) (hornbug's size ~3: the doubles' spacing
+  // there is ~1e-10, TetGen's shortest edge 3.3e-8). Crossings along one
+  // straight line are rounded 1e-10 off it, and faults followed that the
+  // check found and TetGen -pQ aborted on: the planar coarsening made slivers
+  // 1.9e-10 high (1.5e-8 of their base: not nearly degenerate in TetGen's
+  // relative sense, but their apex that close to the face beyond the base);
+  // a collapse made an edge x-u passing 3.5e-11 from a neighbour of x
+  // (hornbug) or 1e-6 from an edge between two neighbours of x (b9_mesh,
+  // diagonal 160): the guards asked only the rings of v and u.
+  for (const char* name : {"corpus/vhacd__hornbug.off", "corpus/cgal__b9_mesh.off"}) {
+    INFO(name);
+    Soup in = read_soup(test::fixture(name));
+    for (Point3d& p : in.points) {
+      p[0] += 1e6;
+      p[1] -= 2e6;
+      p[2] += 3e5;
+    }
+    const RebuildResult result = rebuild(in);
+    check_tetgen_ready(result, std::string("rebuild_far_") + (name[7] == 'v' ? "hornbug" : "b9_mesh") + ".off");
   }
 }
 

@@ -1628,11 +1628,16 @@ class PlanarCoarsening {
   PlanarCoarsening(const Facets& f, const std::vector<OutVertex>& vertices, const std::vector<char>& on_plane,
                    const std::vector<Tri>& tris)
       : f_(f), on_plane_(on_plane) {  // copied: collapses update it
+    Region all;
     for (const OutVertex& v : vertices) {
       mesh_.add_vertex(ipoint(v.p));
       facet_.push_back(v.facet);
+      grow(all, v.p, all.count++ == 0);
     }
     for (const Tri& t : tris) mesh_.add_face(SVertex(t[0]), SVertex(t[1]), SVertex(t[2]));
+    // TetGen's shortest edge, a little longer (the written surface's bbox
+    // is about these points').
+    shortest_edge_ = vertices.empty() ? 0 : 1.01 * tetgen_epsilon_ * dist(all.lo, all.hi);
   }
 
   std::size_t run() {
@@ -1736,7 +1741,8 @@ class PlanarCoarsening {
         const SVertex a = mesh_.source(g), c = mesh_.target(mesh_.next(g));
         if (a == u || c == u) continue;  // the two faces the collapse removes
         const Point3d pa = pt(mesh_.point(a)), pu = pt(mesh_.point(u)), pc = pt(mesh_.point(c));
-        if (orient2(axis, pa, pu, pc) != star || is_nearly_degenerate(pa, pu, pc, tetgen_epsilon_)) {
+        if (orient2(axis, pa, pu, pc) != star || is_nearly_degenerate(pa, pu, pc, tetgen_epsilon_) ||
+            corner_near_side(pa, pu, pc)) {
           ok = false;
           break;
         }
@@ -1758,8 +1764,20 @@ class PlanarCoarsening {
     return kept;
   }
 
+  /// A corner within TetGen's shortest edge of the opposite side: then it
+  /// is that close to the face across that side too (check --tetgen-ready:
+  /// a vertex-face pair, and edge pairs). Seen on hornbug moved 1e6 from the
+  /// origin: crossings along one straight line rounded to 1e-10 off it, a
+  /// sliver 1.5e-8 of its base high (not nearly degenerate in TetGen's
+  /// relative sense) but 1.9e-10 from the face beyond its base.
+  bool corner_near_side(const Point3d& a, const Point3d& b, const Point3d& c) const {
+    return segments_closer_than(a, a, b, c, shortest_edge_) || segments_closer_than(b, b, c, a, shortest_edge_) ||
+           segments_closer_than(c, c, a, b, shortest_edge_);
+  }
+
   static constexpr std::size_t kMaxValence = 24;
   const double tetgen_epsilon_ = InspectOptions().tetgen_epsilon;
+  double shortest_edge_ = 0;
   const Facets& f_;
   std::vector<char> on_plane_;
   std::unordered_map<std::uint64_t, bool> coplanar_;
@@ -2129,30 +2147,72 @@ class BoundedDecimation {
       if (!CGAL::Euler::does_satisfy_link_condition(mesh_.edge(c.h), mesh_)) continue;
       if (!near_reference(c, limit)) continue;
       if (index_.would_intersect(c.proposed, star)) continue;
-      if (leaves_vertex_near_edge(c) || leaves_near_pairs(c)) continue;
+      const std::vector<vertex_descriptor>& near = guarded(c);
+      if (leaves_vertex_near_edge(c, near) || leaves_near_pairs(c, near)) continue;
       apply(c);
       return true;
     }
     return false;
   }
 
-  /// Would an edge of the new fan pass within TetGen's relative tolerance
-  /// of a vertex round v or u it does not end at? TetGen cannot recover such
-  /// an edge as a segment (check --tetgen-ready: "vertices nearly on an
-  /// edge"), and the grid surface is meant for it. Only the two rings are
+  /// The vertices the guards below ask about a collapse v -> u: round v, u
+  /// and the fan's outer vertices x (the ring of v), sorted. Only these are
   /// asked (a vertex from elsewhere that near would make the surface nearly
-  /// touch itself; asking the index for every edge cost 1.5x the time).
-  /// Decided by the filtered predicate on the doubles.
-  bool leaves_vertex_near_edge(const Candidate& c) const {
+  /// touch itself; asking the index for every new edge cost 1.5x the time).
+  /// The rings of x: seen on hornbug moved 1e6 from the origin, a new edge
+  /// x-u passing 3.5e-11 from a neighbour of x, and on b9_mesh moved so, a new
+  /// edge x-u passing 1e-6 from an edge between two neighbours of x: edges
+  /// out of x nearly along another face round x, the faces folded onto each
+  /// other at x, which the fold test (adjacent faces only) does not see.
+  const std::vector<vertex_descriptor>& guarded(const Candidate& c) {
+    std::vector<vertex_descriptor>& near = guarded_;
+    near.clear();
+    const vertex_descriptor v = mesh_.source(c.h), u = mesh_.target(c.h);
+    for (vertex_descriptor x : {v, u})
+      for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(x), mesh_)) near.push_back(w);
+    for (vertex_descriptor x : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_))
+      for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(x), mesh_)) near.push_back(w);
+    std::sort(near.begin(), near.end());
+    near.erase(std::unique(near.begin(), near.end()), near.end());
+    // The new fan's outer vertices (each new edge x-u once), and its box,
+    // grown by TetGen's shortest edge (more than its relative tolerance
+    // times any edge): nothing outside comes that close.
+    outer_.clear();
+    Region fan;
+    for (const auto& t : c.proposed) {
+      outer_.push_back(t[0]);
+      outer_.push_back(t[2]);
+      for (vertex_descriptor x : t) grow(fan, at(x), fan.count++ == 0);
+    }
+    std::sort(outer_.begin(), outer_.end());
+    outer_.erase(std::unique(outer_.begin(), outer_.end()), outer_.end());
+    const double shortest = tetgen_shortest_edge();
+    for (int k = 0; k < 3; ++k) {
+      fan_lo_[k] = fan.lo[k] - shortest;
+      fan_hi_[k] = fan.hi[k] + shortest;
+    }
+    return near;
+  }
+  /// Inside the fan's grown box (guarded()).
+  bool near_fan(const Point3d& p) const {
+    for (int k = 0; k < 3; ++k)
+      if (p[k] < fan_lo_[k] || p[k] > fan_hi_[k]) return false;
+    return true;
+  }
+
+  /// Would an edge of the new fan pass within TetGen's relative tolerance
+  /// of a vertex `near` (guarded()) it does not end at? TetGen cannot
+  /// recover such an edge as a segment (check --tetgen-ready: "vertices
+  /// nearly on an edge"), and the grid surface is meant for it. Decided by
+  /// the filtered predicate on the doubles.
+  bool leaves_vertex_near_edge(const Candidate& c, const std::vector<vertex_descriptor>& near) const {
     const double eps = InspectOptions().tetgen_epsilon;
     const vertex_descriptor v = mesh_.source(c.h), u = mesh_.target(c.h);
-    std::vector<vertex_descriptor> near;
-    for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_)) near.push_back(w);
-    for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(u), mesh_)) near.push_back(w);
-    for (const auto& t : c.proposed)
-      for (vertex_descriptor x : {t[0], t[2]})  // the new edges x-u
-        for (vertex_descriptor w : near)
-          if (w != x && w != u && w != v && is_nearly_on_segment(at(w), at(x), at(u), eps)) return true;
+    for (vertex_descriptor w : near) {
+      if (w == u || w == v || !near_fan(at(w))) continue;
+      for (vertex_descriptor x : outer_)  // the new edges x-u
+        if (w != x && is_nearly_on_segment(at(w), at(x), at(u), eps)) return true;
+    }
     return false;
   }
 
@@ -2162,21 +2222,15 @@ class BoundedDecimation {
   double tetgen_shortest_edge() const { return 1.01 * InspectOptions().tetgen_epsilon * diagonal_; }
 
   /// Would an edge of the new fan pass within TetGen's shortest edge of an
-  /// edge between two other vertices round v or u, or a vertex round them
-  /// come that close to a new triangle it is not a corner of (check
+  /// edge between two other vertices `near` (guarded()), or one of them come
+  /// that close to a new triangle it is not a corner of (check
   /// --tetgen-ready: "edge pairs" and "vertex-face pairs closer than its
   /// shortest edge"; seen: a fan edge crossing a chord of the ring 1e-16
   /// apart, and a ring vertex 1e-16 over a new triangle: the surface folded
-  /// flat on itself there)? The rings only, as leaves_vertex_near_edge; a
-  /// box test first.
-  bool leaves_near_pairs(const Candidate& c) const {
+  /// flat on itself there)? A box test first.
+  bool leaves_near_pairs(const Candidate& c, const std::vector<vertex_descriptor>& near) const {
     const double shortest = tetgen_shortest_edge();
     const vertex_descriptor v = mesh_.source(c.h), u = mesh_.target(c.h);
-    std::vector<vertex_descriptor> near;
-    for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_)) near.push_back(w);
-    for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(u), mesh_)) near.push_back(w);
-    std::sort(near.begin(), near.end());
-    near.erase(std::unique(near.begin(), near.end()), near.end());
     auto in_near = [&](vertex_descriptor w) { return std::binary_search(near.begin(), near.end(), w); };
     auto apart = [&](std::initializer_list<const Point3d*> x, std::initializer_list<const Point3d*> y) {
       for (int k = 0; k < 3; ++k) {
@@ -2189,19 +2243,21 @@ class BoundedDecimation {
     };
     for (vertex_descriptor w : near) {
       if (w == u || w == v) continue;
-      for (const auto& t : c.proposed) {  // w near a new triangle
+      const bool w_near = near_fan(at(w));
+      for (std::size_t i = 0; w_near && i < c.proposed.size(); ++i) {  // w near a new triangle
+        const auto& t = c.proposed[i];
         if (w == t[0] || w == t[1] || w == t[2]) continue;
         const Point3d &a = at(t[0]), &b = at(t[1]), &d = at(t[2]), &p = at(w);
         if (!apart({&a, &b, &d}, {&p}) && point_closer_than_to_triangle(p, a, b, d, shortest)) return true;
       }
       for (vertex_descriptor z : CGAL::vertices_around_target(mesh_.halfedge(w), mesh_)) {
         if (z <= w || z == u || z == v || !in_near(z)) continue;  // each chord w z once
-        for (const auto& t : c.proposed)
-          for (vertex_descriptor x : {t[0], t[2]}) {  // the new edges x-u
-            if (x == w || x == z) continue;
-            const Point3d &a = at(x), &b = at(u), &p = at(w), &q = at(z);
-            if (!apart({&a, &b}, {&p, &q}) && segments_closer_than(a, b, p, q, shortest)) return true;
-          }
+        if (!w_near && !near_fan(at(z)) && apart({&at(w), &at(z)}, {&fan_lo_, &fan_hi_})) continue;
+        for (vertex_descriptor x : outer_) {  // the new edges x-u
+          if (x == w || x == z) continue;
+          const Point3d &a = at(x), &b = at(u), &p = at(w), &q = at(z);
+          if (!apart({&a, &b}, {&p, &q}) && segments_closer_than(a, b, p, q, shortest)) return true;
+        }
       }
     }
     return false;
@@ -2321,6 +2377,8 @@ class BoundedDecimation {
   std::vector<Point3d> at_;
   double diagonal_ = 0;  // of the points' bounding box: bounds every edge
   // try_collapse's scratch buffers
+  std::vector<vertex_descriptor> guarded_, outer_;  // guarded()'s vertices, the fan's outer ones
+  Point3d fan_lo_{}, fan_hi_{};                     // and the fan's box
   std::vector<face_descriptor> star_;
   std::vector<Candidate> candidates_;
   std::vector<std::pair<vertex_descriptor, Point3d>> beyond_;
