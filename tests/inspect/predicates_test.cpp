@@ -11,6 +11,7 @@
 #include "polyheal/inspect/predicates.h"
 #include "polyheal/inspect/exact_predicates.h"
 #include "polyheal/mesh/mesh.h"
+#include "support/builders.h"
 
 using namespace polyheal;
 using Q = CGAL::Exact_rational;
@@ -241,4 +242,34 @@ TEST_CASE("predicates: segment-segment and point-triangle distance tests equal e
       CHECK(point_closer_than_to_triangle(p, a, b, a, t) == (s2 < Kernel::FT(t) * Kernel::FT(t)));
     }
   }
+}
+
+TEST_CASE("predicates: the enclosed volume's sign does not change when the faces move far away", "[inspect]") {
+  // A unit box outward, and the same box with its top face missing (open:
+  // the sum is not the same about every point). About the origin the open
+  // box moved 1e6 up summed to a negative volume (the missing top's term,
+  // growing with the distance, dominates); about its bbox centre the sign is
+  // the closed box's at any distance (deer_bound moved 1e5 away was taken
+  // for inside out by repair and turned, 1191 of 1206 faces removed).
+  const Soup closed = test::box({0, 0, 0}, {1, 1, 1});
+  REQUIRE(closed.face_count() == 12);
+  for (const bool open : {false, true})
+    for (const double shift : {0.0, 1e6, -1e6}) {
+      INFO((open ? "open" : "closed") << " box moved " << shift);
+      Soup s = closed;
+      for (Point3d& p : s.points) {
+        p[0] -= 0.5 * shift;
+        p[2] += shift;
+      }
+      std::vector<std::size_t> faces;
+      for (std::size_t f = 0; f < s.face_count(); ++f) {
+        bool top = true;
+        for (Index i : s.face(f)) top = top && s.points[i][2] == 1 + shift;
+        if (!(open && top)) faces.push_back(f);
+      }
+      REQUIRE(faces.size() == (open ? 10u : 12u));
+      CHECK(enclosed_volume_sign(s, faces) == 1);
+      for (Point3d& p : s.points) std::swap(p[0], p[1]);  // mirrored: inside out
+      CHECK(enclosed_volume_sign(s, faces) == -1);
+    }
 }

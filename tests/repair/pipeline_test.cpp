@@ -116,18 +116,28 @@ TEST_CASE("repair: convex pieces glued with a wall left between two (deer_bound)
           "[pipeline]") {
   // Not a 2-cycle (a one-sided wall, a face doubled in one direction), so
   // this went to the grid (2332 faces, Hausdorff 3.1% of the diagonal);
-  // regularize leaves the walls out and keeps the input's faces.
-  const Soup in = read_soup(test::fixture("deer_bound.off"));
-  RepairOptions o;
-  o.for_tetgen = true;
-  const RepairResult r = repair(in, o);
-  CHECK(ran(r.report, "regularize", true));
-  CHECK_FALSE(ran(r.report, "rebuild", true));
-  const Assessment a = written(in, r, "pipe_deer_bound.off", 0.05 * r.report.diagonal, true);  // TetGen meshes it
-  CHECK(a.certified);
-  CHECK(a.faces_kept > in.face_count() * 9 / 10);
-  CHECK(a.output_to_input < 1e-9 * r.report.diagonal);  // every output face lies on the input
-  CHECK(a.dropped_components == 0);
+  // regularize leaves the walls out and keeps the input's faces. Also moved
+  // 1e5 away: the sign of its (open) enclosed volume was taken about the
+  // origin there, read inside out, and the surface turned (14 faces left).
+  for (const double shift : {0.0, 1e5}) {
+    INFO("moved " << shift);
+    Soup in = read_soup(test::fixture("deer_bound.off"));
+    for (Point3d& p : in.points) {
+      p[0] += shift;
+      p[1] -= 2 * shift;
+      p[2] += 0.3 * shift;
+    }
+    RepairOptions o;
+    o.for_tetgen = true;
+    const RepairResult r = repair(in, o);
+    CHECK(ran(r.report, "regularize", true));
+    CHECK_FALSE(ran(r.report, "rebuild", true));
+    const Assessment a = written(in, r, "pipe_deer_bound.off", 0.05 * r.report.diagonal, true);  // TetGen meshes it
+    CHECK(a.certified);
+    CHECK(a.faces_kept > in.face_count() * 9 / 10);
+    CHECK(a.output_to_input < 1e-9 * r.report.diagonal);  // every output face lies on the input
+    CHECK(a.dropped_components == 0);
+  }
 }
 
 TEST_CASE("repair: a dirty soup falls back to the overlay grid and comes out certified", "[pipeline]") {

@@ -510,17 +510,29 @@ int enclosed_volume_sign(const Soup& soup, const std::vector<std::size_t>& faces
     for (Index i : soup.face(f))
       if (!std::isfinite(soup.points[i][0]) || !std::isfinite(soup.points[i][1]) || !std::isfinite(soup.points[i][2]))
         return 0;
+  // About the faces' bounding-box centre, not the origin: for a closed,
+  // oriented set of faces the sum is the same about any point, but a set
+  // that is not (an open or non-manifold soup the pipeline asks about) has
+  // a sum that grows with its distance from the reference point — about the
+  // origin, deer_bound moved 1e5 away read as inside out and was turned.
+  Point3d lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (std::size_t f : faces)
+    for (Index i : soup.face(f))
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = std::min(lo[k], soup.points[i][k]);
+        hi[k] = std::max(hi[k], soup.points[i][k]);
+      }
+  if (faces.empty()) return 0;
+  const Point3d o{0.5 * lo[0] + 0.5 * hi[0], 0.5 * lo[1] + 0.5 * hi[1], 0.5 * lo[2] + 0.5 * hi[2]};
   return filtered([&](auto nt) {
     using NT = decltype(nt);
+    auto at = [&](const Point3d& p) { return sub<NT>(p, o); };
     NT volume = 0;
     for (std::size_t f : faces) {
       const FaceView v = soup.face(f);
-      const Point3d& a = soup.points[v[0]];
-      const Vec<NT> pa{NT(a[0]), NT(a[1]), NT(a[2])};
-      for (std::size_t k = 1; k + 1 < v.size(); ++k) {
-        const Point3d &b = soup.points[v[k]], &c = soup.points[v[k + 1]];
-        volume += dot(pa, cross(Vec<NT>{NT(b[0]), NT(b[1]), NT(b[2])}, Vec<NT>{NT(c[0]), NT(c[1]), NT(c[2])}));
-      }
+      const Vec<NT> pa = at(soup.points[v[0]]);
+      for (std::size_t k = 1; k + 1 < v.size(); ++k)
+        volume += dot(pa, cross(at(soup.points[v[k]]), at(soup.points[v[k + 1]])));
     }
     return static_cast<int>(static_cast<CGAL::Sign>(CGAL::sign(volume)));
   });

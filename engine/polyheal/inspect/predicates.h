@@ -81,9 +81,11 @@ bool lies_along_segment(const Point3d& p, const Point3d& a, const Point3d& b, do
 bool is_nearly_degenerate(const Point3d& a, const Point3d& b, const Point3d& c, double eps);
 
 /// Sign of the volume that faces `faces` of `soup` enclose (the sum of the
-/// determinants a . (b x c) over their fan triangles), exactly: intervals,
-/// then rationals. Meaningful for a closed, oriented set of faces: positive
-/// when they face outwards, negative inwards (a cavity, or inside out).
+/// determinants (a-o) . ((b-o) x (c-o)) over their fan triangles, o the
+/// centre of their bounding box), exactly: intervals, then rationals.
+/// Meaningful for a closed, oriented set of faces: positive when they face
+/// outwards, negative inwards (a cavity, or inside out); for others a
+/// guess that does not change when the faces are moved far away.
 int enclosed_volume_sign(const Soup& soup, const std::vector<std::size_t>& faces);
 
 }  // namespace polyheal
