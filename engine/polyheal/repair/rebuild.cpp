@@ -961,16 +961,9 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
   if (std::find(ok.begin(), ok.end(), 1) == ok.end()) return kept;
   // TetGen's shortest edge on the joined surface (its bbox is the grid
   // surface's, within the decimation's bound; twice, for that margin).
-  double shortest_edge = 0;
-  {
-    Point3d lo = vertices[0].p, hi = vertices[0].p;
-    for (const OutVertex& v : vertices)
-      for (int k = 0; k < 3; ++k) {
-        lo[k] = std::min(lo[k], v.p[k]);
-        hi[k] = std::max(hi[k], v.p[k]);
-      }
-    shortest_edge = 2 * InspectOptions().tetgen_epsilon * dist(lo, hi);
-  }
+  Region grid_box;
+  for (const OutVertex& v : vertices) grow(grid_box, v.p, grid_box.count++ == 0);
+  const double shortest_edge = 2 * InspectOptions().tetgen_epsilon * dist(grid_box.lo, grid_box.hi);
   // The grid surface: vertex normals, halfedges, points, stars.
   std::vector<Point3d> vnormal(vertices.size(), Point3d{0, 0, 0});
   for (const Tri& t : tris) {
