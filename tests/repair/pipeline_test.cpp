@@ -6,12 +6,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <stdexcept>
 
 #include "polyheal/inspect/nesting.h"
 #include "polyheal/inspect/report.h"
 #include "polyheal/io/read.h"
 #include "polyheal/io/write.h"
+#include "polyheal/mesh/vec3.h"
 #include "polyheal/repair/pipeline.h"
 #include "support/builders.h"
 
@@ -234,6 +236,50 @@ TEST_CASE("repair --for tetgen: the grid's surface, or what a stage after it fix
     CHECK(a.certified);  // tetgen_ready on the file as written
     CHECK(test::tetgen_meshes(p, "tgm_" + stem + ".off", "-pQ"));  // TetGen's defaults
   }
+}
+
+TEST_CASE("repair --for tetgen: two parts 1e-10 apart are gridded only where they nearly touch", "[pipeline][tetgen]") {
+  // Clean (closed, disjoint), but closer than TetGen's shortest edge at one
+  // vertex: an assembly whose parts touch within a tolerance. No collapse or
+  // flip separates two components; the overlay grid does. It used to
+  // re-tessellate everything (no input face kept: a certified clean input
+  // has no defect of its own, so the whole surface was one patch, and the
+  // zip gave it up on the hazards); TetGen's hazards are now defects the
+  // grid replaces, and the faces away from them keep their coordinates.
+  const Soup a = test::icosphere(1, 3);
+  Soup b = a;
+  for (Point3d& p : b.points) p[2] += 2 + 1e-10;  // a's top vertex (0, 0, 1) under b's bottom one
+  const Soup in = test::concat(a, b);
+  InspectOptions io;
+  io.tetgen_segments = true;
+  const Report before = inspect(in, io);
+  REQUIRE(before.certified_clean());
+  REQUIRE_FALSE(before.tetgen_ready());
+  RepairOptions o;
+  o.for_tetgen = true;
+  const RepairResult r = repair(in, o);
+  CHECK(ran(r.report, "rebuild", true));
+  const std::string p = test::scratch("pipe_touching.off");
+  write_soup(r.soup, p);
+  const Soup out = read_soup(p);
+  const Assessment as = assess(in, r.input, out, 0.05 * r.report.diagonal, true);
+  CHECK(as.certified);  // TetGen-ready, on the file as written
+  CHECK(as.within_deviation);
+  CHECK(test::tetgen_meshes(p, "tet_pipe_touching.off", "-pQ"));
+  // Every input face farther than 5% of the diagonal from the contact is
+  // in the output as it was (measured: all beyond 3.2%).
+  const std::set<std::array<Point3d, 3>> kept = test::faces_by_position(out);
+  const std::set<std::array<Point3d, 3>> given = test::faces_by_position(in);
+  const Point3d contact{0, 0, 1};
+  std::size_t far = 0, far_kept = 0;
+  for (const auto& f : given) {
+    const double d = std::min({norm(sub(f[0], contact)), norm(sub(f[1], contact)), norm(sub(f[2], contact))});
+    if (d <= 0.05 * r.report.diagonal) continue;
+    ++far;
+    far_kept += kept.count(f);
+  }
+  CHECK(far > in.face_count() * 9 / 10);
+  CHECK(far_kept == far);
 }
 
 TEST_CASE("assess: provenance matches polygons corner for corner, in either orientation and from any corner",

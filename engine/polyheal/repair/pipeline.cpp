@@ -85,6 +85,32 @@ Soup without_tiny_flagged_components(const Soup& s, const Report& r, double size
   return out;
 }
 
+/// Where the report finds what TetGen's tolerances stop on (sharp folds,
+/// nearly degenerate faces, flip hazards, and vertices, edges and faces closer
+/// than its shortest edge), as triangles: the faces named, and each vertex
+/// named as a point (a zero-area triangle). The rebuild stage keeps no input
+/// face near them (RebuildOptions::avoid): the grid re-tessellates there and
+/// nowhere else.
+std::vector<std::array<Point3d, 3>> tetgen_hazards(const Soup& s, const Report& r) {
+  const Soup welded = apply_weld(s, weld_identical_points(s.points));
+  std::vector<std::array<Point3d, 3>> out;
+  auto face = [&](std::size_t f) {
+    const FaceView v = welded.face(f);
+    for (std::size_t k = 1; k + 1 < v.size(); ++k)
+      out.push_back({welded.points[v[0]], welded.points[v[k]], welded.points[v[k + 1]]});
+  };
+  auto vertex = [&](Index i) { out.push_back({welded.points[i], welded.points[i], welded.points[i]}); };
+  for (const FacePair& p : r.sharp_folds) face(p.first), face(p.second);
+  for (const FacePair& p : r.flip_hazards) face(p.first), face(p.second);
+  for (std::size_t f : r.nearly_degenerate_faces) face(f);
+  for (const VertexNearEdge& v : r.vertices_near_edges) vertex(v.vertex), vertex(v.a), vertex(v.b);
+  for (const auto& pair : r.close_vertices) vertex(pair[0]), vertex(pair[1]);
+  for (const EdgeNearEdge& e : r.edges_near_edges)
+    for (Index i : {e.e[0], e.e[1], e.f[0], e.f[1]}) vertex(i);
+  for (const VertexNearFace& v : r.vertices_near_faces) vertex(v.vertex), face(v.face);
+  return out;
+}
+
 class Pipeline {
  public:
   Pipeline(const Soup& input, const RepairOptions& o) : input_(input), o_(o) {}
@@ -572,6 +598,10 @@ class Pipeline {
       // degenerated-sd's grid surface passed every TetGen-readiness test of
       // ours and TetGen 1.5 threw in delaunizesegments.)
       ro.wrap_outlying = false;
+      // For TetGen, the input's own hazards are defects the grid replaces
+      // (a certified clean input is otherwise kept whole, hazards and all,
+      // and the zip gives every patch up).
+      if (o_.for_tetgen) ro.avoid = tetgen_hazards(input_, result_.input);
       ro.observer = o_.observer;
       RebuildResult res = polyheal::rebuild(input_, ro);
       const RebuildReport& r = res.report;
@@ -584,6 +614,9 @@ class Pipeline {
                   {"extracted_faces", double(r.extracted_faces)}};
       std::ostringstream line;
       line << "overlay grid of cell " << r.cell << " (" << r.cell_rule << "), " << r.faces_out << " faces";
+      if (r.kept_patches + r.patches_given_up)
+        line << "; " << r.kept_faces << " input faces kept in " << r.kept_patches << " patches (" << r.patches_given_up
+             << " given up)";
       if (r.sheet_facets + r.thin_facets)
         line << "; " << r.sheet_facets + r.thin_facets << " sheet or thin facets wrapped in a shell";
       s.outcome = line.str();

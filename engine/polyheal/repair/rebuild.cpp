@@ -772,8 +772,9 @@ namespace {
 // coordinates, when it is far from every defect: each of its edges is used
 // by two facets in opposite directions, its corners are manifold, it
 // intersects no other facet, it bounds the volume (winding number ~0 in
-// front of it and ~1 behind) and no facet that fails these tests comes
-// within two cells of its corners. Kept facets join into patches across
+// front of it and ~1 behind) and no facet that fails these tests, or that
+// the caller asks to avoid (RebuildOptions::avoid), comes within two cells
+// of its corners. Kept facets join into patches across
 // their edges. The grid faces a patch covers (a corner within half a cell of
 // it, facing the same way) are taken out — with the faces that would jut into
 // the hole or pinch it at a vertex — and each boundary loop of the patch is
@@ -878,7 +879,8 @@ std::vector<FacePair> near_pairs_at_seam(const Soup& joined, const std::vector<T
 }
 
 KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, double h,
-                               std::vector<OutVertex>& vertices, std::vector<Tri>& tris) {
+                               const std::vector<std::array<Point3d, 3>>& avoid, std::vector<OutVertex>& vertices,
+                               std::vector<Tri>& tris) {
   KeptRegions kept;
   const std::size_t T = f.tris.size();
   // Edges: uses in each direction and the two facets of a good edge.
@@ -941,7 +943,10 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
     Point3d front, back;
     ok[t] = beside(f, t, 0.05 * h, front, back) && winding(front) < 0.25 && winding(back) > 0.75;
   });
-  std::vector<std::array<Point3d, 3>> bad;
+  // The caller's defects count as ours (a margin of half or one cell round
+  // them kept fewer facets on anchor's offset: the zip gave up the patches
+  // between them).
+  std::vector<std::array<Point3d, 3>> bad = avoid;
   for (std::size_t t = 0; t < T; ++t)
     if (!ok[t]) bad.push_back({f.points[f.tris[t][0]], f.points[f.tris[t][1]], f.points[f.tris[t][2]]});
   if (!bad.empty()) {
@@ -3003,7 +3008,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   KeptRegions kept;
   if (options.keep_regions) {
     if (obs) obs->stage("keeping clean regions");
-    kept = keep_clean_regions(f, winding, g.h, vertices, tris);
+    kept = keep_clean_regions(f, winding, g.h, options.avoid, vertices, tris);
     r.kept_faces = kept.faces;
     r.kept_patches = kept.patches;
     r.patches_given_up = kept.given_up;

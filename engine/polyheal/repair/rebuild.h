@@ -57,6 +57,7 @@
 // unchanged.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -74,6 +75,9 @@ struct RebuildOptions {
   bool keep_clean = true;      // a certified clean input is returned unchanged, and one that the
                                // exact cleanup closes returned cleaned (RebuildReport::cleaned)
   bool keep_regions = true;    // keep input facets far from every defect, zipped to the grid surface
+  // More defects, the caller's (repair --for tetgen: what TetGen's tolerances
+  // stop on): no input facet within two cells of these triangles is kept.
+  std::vector<std::array<Point3d, 3>> avoid;
   bool sheets = true;          // wrap facets that bound no volume in a shell (false: leave them out, reported lost)
   double sheet_shell = 0.9;    // the shell's half-thickness, in cells (above sqrt(3)/2: see rebuild())
   bool wrap_outlying = true;   // with sheets: wrap what is still 0.6 cell outside the surface in the shell too
