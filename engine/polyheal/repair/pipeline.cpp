@@ -228,8 +228,10 @@ class Pipeline {
   /// Runs one stage: `run()` returns the candidate surface (or throws
   /// UnsupportedInput: the stage refuses this surface). The candidate
   /// replaces the current surface when it is better (see below).
+  /// `clean_only`: a candidate not certified clean is not kept, whatever
+  /// TetGen defects it has fewer of.
   template <class Run>
-  StageReport& stage(const char* name, Run run, bool only_within = false) {
+  StageReport& stage(const char* name, Run run, bool only_within = false, bool clean_only = false) {
     if (o_.observer) o_.observer->stage(name);
     StageReport s;
     s.name = name;
@@ -287,6 +289,8 @@ class Pipeline {
       }
       const bool beyond_limit = better && only_within && !within_limit(next, next_fills);
       if (beyond_limit) better = false;
+      const bool unclean = better && clean_only && !next.report.certified_clean();
+      if (unclean) better = false;
       if (better) {
         s.accepted = true;
         cur_ = std::move(next);
@@ -294,6 +298,7 @@ class Pipeline {
       } else {
         s.outcome += (s.outcome.empty() ? "" : "; ") + std::string("not kept: ") +
                      (beyond_limit ? std::string("the surface moves more than --max-deviation")
+                      : unclean    ? std::string("not certified clean")
                       : empty      ? std::string("no face left")
                       : both_ok    ? "another topology than, or farther from the input than, the current surface"
                                    : std::to_string(next.defects) + " defects after, " +
@@ -471,6 +476,7 @@ class Pipeline {
   /// better than the current one.
   void tetgen_pass(double tolerance = -1) {
     if (!cur_.report.close_vertices.empty()) short_edges();
+    if (tetgen_pass_due() && !cur_.report.close_vertices.empty()) weld_close_vertices();
     const State before = cur_;
     if (tetgen_pass_due()) tetgen_shapes(tolerance, false, before);
     if (tetgen_pass_due()) tetgen_shapes(tolerance, true, before);
@@ -489,6 +495,37 @@ class Pipeline {
                   " refused (a defect around them)" + (r.gave_up ? "; gave up (a defect no collapse explains)" : "");
       return out;
     });
+  }
+
+  /// Close points that share no edge (two parts or sheets nearly touching
+  /// at a vertex: short_edges() leaves them) are welded into one, and the
+  /// union of the welded surface taken: where it pinches at the welded
+  /// point, each cone gets its own vertex, moved 1% of the local edge into
+  /// it (regularize.h) — far beyond TetGen's shortest edge, and far less
+  /// than the overlay grid would move (it joins the parts by a neck a cell
+  /// wide). Two spheres 1e-10 apart: 2548 of 2560 faces kept, the surface
+  /// moved 0.03% of the diagonal, against 1.2% and one component through
+  /// the grid.
+  void weld_close_vertices() {
+    stage("weld close vertices (TetGen)", [&](StageReport& s) {
+      CleanSoupOptions co;
+      co.weld = InspectOptions{}.tetgen_epsilon * bbox_diagonal(cur_.report);
+      co.fill_holes = false;
+      const CleanSoupResult c = clean_soup(cur_.soup, co);
+      s.max_displacement = c.report.max_weld_move;
+      RegularizeOptions ro;
+      ro.certify = false;
+      ro.observer = o_.observer;
+      RegularizeResult res = polyheal::regularize(c.soup, ro);
+      s.counts = {{"close_vertices_before", double(cur_.report.close_vertices.size())},
+                  {"welded_near", double(c.report.near_vertices_welded)},
+                  {"intersecting_pairs", double(res.report.intersecting_pairs_in)}};
+      s.outcome = std::to_string(c.report.near_vertices_welded) + " of " +
+                  std::to_string(cur_.report.close_vertices.size()) +
+                  " vertex pairs closer than TetGen's shortest edge welded; the union of the result: " +
+                  std::to_string(res.report.intersecting_pairs_in) + " intersecting pairs";
+      return std::move(res.soup);
+    }, false, true);
   }
 
   /// `tolerance`: how far the operations may move the surface (model units;
