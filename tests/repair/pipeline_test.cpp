@@ -14,6 +14,7 @@
 #include "polyheal/io/read.h"
 #include "polyheal/io/write.h"
 #include "polyheal/mesh/vec3.h"
+#include "polyheal/repair/near_sheets.h"
 #include "polyheal/repair/pipeline.h"
 #include "support/builders.h"
 
@@ -240,35 +241,6 @@ TEST_CASE("repair --for tetgen: the grid's surface, or what a stage after it fix
 
 namespace {
 
-/// Two icospheres (1280 faces each), b over a, their closest vertices or
-/// faces 1e-10 apart: closed and disjoint, so certified clean, but closer
-/// than TetGen's shortest edge — an assembly whose parts touch within a
-/// tolerance. `over_face`: b's bottom vertex over the inside of a face of
-/// a's top vertex (both spheres are symmetric through their centres, so that
-/// face and one of b's lie parallel, 1e-10 apart), else over a's top vertex.
-/// `touching`: a's top vertex and b's bottom vertex.
-Soup touching_spheres(bool over_face, std::array<Point3d, 2>& touching) {
-  const Soup a = test::icosphere(1, 3);
-  const Point3d contact{0, 0, 1};
-  Point3d shift{0, 0, 2 + 1e-10};  // a's top vertex (0, 0, 1) under b's bottom one (0, 0, -1)
-  if (over_face) {
-    std::size_t f = 0;
-    while (f < a.face_count() && a.points[a.face(f)[0]] != contact && a.points[a.face(f)[1]] != contact &&
-           a.points[a.face(f)[2]] != contact)
-      ++f;
-    const Point3d &p = a.points[a.face(f)[0]], &q = a.points[a.face(f)[1]], &r = a.points[a.face(f)[2]];
-    const Point3d c = mul(add(add(p, q), r), 1.0 / 3);
-    const Point3d n = cross(sub(q, p), sub(r, p));
-    const double x = c[0] / 2, y = c[1] / 2;  // halfway from the top vertex to the centroid
-    const double z = p[2] - (n[0] * (x - p[0]) + n[1] * (y - p[1])) / n[2];  // on the face's plane
-    shift = {x, y, z + 1 + 1e-10};
-  }
-  touching = {contact, add(Point3d{0, 0, -1}, shift)};
-  Soup b = a;
-  for (Point3d& p : b.points) p = add(p, shift);
-  return test::concat(a, b);
-}
-
 /// Writes `r`, reads it back and checks what `repair --for tetgen` promises
 /// on the file: TetGen-ready, within `max_dev`, meshed by `tetgen -pQ`; and
 /// returns how many of the input faces farther than `away` from both
@@ -311,59 +283,36 @@ RepairResult repair_for_tetgen(const Soup& in, Report& before) {
 
 }  // namespace
 
-TEST_CASE("repair --for tetgen: two parts touching at a vertex within 1e-10 are welded there and pulled apart",
+TEST_CASE("repair --for tetgen: two parts touching within 1e-10 are pushed apart by 1e-7, not joined",
           "[pipeline][tetgen]") {
-  // No collapse or flip separates two components. Welding the two
-  // vertices makes the union pinch there, and regularization gives each
-  // cone its own vertex, 1% of the local edge into it: the parts stay two,
-  // the rest keeps its coordinates. (The overlay grid joined them by a neck
-  // a cell wide: one component, Hausdorff 1.2% of the diagonal.)
-  std::array<Point3d, 2> touching;
-  const Soup in = touching_spheres(false, touching);
-  Report before;
-  const RepairResult r = repair_for_tetgen(in, before);
-  CHECK(before.close_vertices.size() == 1);
-  CHECK(ran(r.report, "weld close vertices (TetGen)", true));
-  CHECK_FALSE(ran(r.report, "rebuild", true));
-  std::size_t far = 0;
-  CHECK(far_faces_lost(in, r, "pipe_touching_vertex.off", 0.001 * r.report.diagonal, touching,
-                       0.01 * r.report.diagonal, far) == 0);
-  CHECK(far > in.face_count() * 99 / 100);
-  CHECK(inspect(r.soup).components == 2);
-}
-
-TEST_CASE("repair --for tetgen: two parts 1e-10 apart face to face are gridded only where they nearly touch",
-          "[pipeline][tetgen]") {
-  // No vertex pair to weld here. The overlay grid used to re-tessellate
-  // everything (no input face kept: a certified clean input has no defect
-  // of its own, so the whole surface was one patch, and the zip gave it up
-  // on the hazards); TetGen's hazards are now defects the grid replaces,
-  // and the faces away from them keep their coordinates.
-  std::array<Point3d, 2> touching;
-  const Soup in = touching_spheres(true, touching);
-  Report before;
-  const RepairResult r = repair_for_tetgen(in, before);
-  CHECK(before.close_vertices.empty());
-  CHECK_FALSE(before.vertices_near_faces.empty());
-  CHECK(ran(r.report, "rebuild", true));
-  // What TetGen stops on lies on the two parallel faces (within `near` of
-  // the touching vertices: the faces round them); no input face is kept
-  // within two cells of it, and the zip may take a cell more. Every face
-  // farther than that is in the output as it was.
-  double cell = 0, near = 0;
-  for (const StageReport& s : r.report.stages)
-    for (const auto& [what, value] : s.counts)
-      if (s.name == "rebuild" && what == "cell") cell = value;
-  REQUIRE(cell > 0);
-  for (const Point3d& v : touching)
-    for (std::size_t f = 0; f < in.face_count(); ++f) {
-      const FaceView t = in.face(f);
-      if (in.points[t[0]] != v && in.points[t[1]] != v && in.points[t[2]] != v) continue;
-      for (Index i : t) near = std::max(near, norm(sub(in.points[i], v)));
-    }
-  std::size_t far = 0;
-  CHECK(far_faces_lost(in, r, "pipe_touching_face.off", 0.05 * r.report.diagonal, touching, near + 3 * cell, far) == 0);
-  CHECK(far > in.face_count() * 9 / 10);
+  // Clean (closed, disjoint), but closer than TetGen's shortest edge: an
+  // assembly whose parts touch within a tolerance, at a vertex, or face to
+  // face (two parallel faces 1e-10 apart, crossing edges). No collapse or
+  // flip separates two components; the overlay grid did, joining them by a
+  // neck a cell wide (one component, Hausdorff 1.2% of the diagonal), and
+  // re-tessellating the whole surface. The vertices the close pairs involve
+  // now move apart, twice TetGen's tolerance per round: two components, the
+  // surface moved at most the stage's rounds x steps, and every face beyond
+  // the corners of the close simplices (the faces round the touching
+  // vertices) as it was.
+  for (const bool over_face : {false, true}) {
+    INFO((over_face ? "face to face" : "at a vertex"));
+    std::array<Point3d, 2> touching;
+    const Soup in = test::touching_spheres(over_face, touching);
+    Report before;
+    const RepairResult r = repair_for_tetgen(in, before);
+    CHECK(before.close_vertices.empty() == over_face);
+    CHECK(ran(r.report, "separate near sheets (TetGen)", true));
+    CHECK_FALSE(ran(r.report, "rebuild", true));
+    const SeparateOptions so;
+    const double most = so.max_rounds * so.step * so.epsilon * r.report.diagonal;
+    std::size_t far = 0;
+    const double ring = std::max(test::ring_radius(in, touching[0]), test::ring_radius(in, touching[1]));
+    CHECK(far_faces_lost(in, r, over_face ? "pipe_touching_face.off" : "pipe_touching_vertex.off", most, touching,
+                         2 * ring, far) == 0);
+    CHECK(far > in.face_count() * 95 / 100);
+    CHECK(inspect(r.soup).components == 2);
+  }
 }
 
 TEST_CASE("assess: provenance matches polygons corner for corner, in either orientation and from any corner",

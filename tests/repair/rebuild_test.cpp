@@ -14,6 +14,7 @@
 #include "polyheal/io/write.h"
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/topology.h"
+#include "polyheal/mesh/vec3.h"
 #include "polyheal/mesh/weld.h"
 #include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/rebuild.h"
@@ -24,7 +25,6 @@ using namespace polyheal;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// Writes the output to scratch(`name`), asks TetGen whether it meshes it,
 /// and returns the file as read back: every check runs on what was written.
@@ -814,4 +814,41 @@ TEST_CASE("loss measure: on a certified surface the pseudo-normal inside test ag
     CHECK(fast.absorbed == slow.absorbed);
     CHECK(std::abs(fast.outside_distance - slow.outside_distance) <= 0.05 * far);
   }
+}
+
+TEST_CASE("rebuild: input facets near the caller's avoid triangles go to the grid, the rest are kept exactly",
+          "[rebuild]") {
+  // repair --for tetgen hands the grid what TetGen's tolerances stop on
+  // (RebuildOptions::avoid). Two spheres whose parallel faces lie 1e-10
+  // apart are clean: without `avoid` the whole surface was one patch and
+  // the zip, finding those faces too close, gave it up (no facet kept).
+  // With the faces round the touching vertices to avoid, no facet within two
+  // cells of them is kept (the zip may take a cell more); every other one is,
+  // and the joined surface is TetGen-ready.
+  std::array<Point3d, 2> touching;
+  const Soup in = test::touching_spheres(true, touching);
+  RebuildOptions o;
+  o.keep_clean = false;  // a clean input would be returned as it is
+  for (const Point3d& v : touching)
+    for (std::size_t f = 0; f < in.face_count(); ++f) {
+      const FaceView t = in.face(f);
+      if (in.points[t[0]] == v || in.points[t[1]] == v || in.points[t[2]] == v)
+        o.avoid.push_back({in.points[t[0]], in.points[t[1]], in.points[t[2]]});
+    }
+  const double near = std::max(test::ring_radius(in, touching[0]), test::ring_radius(in, touching[1]));
+  const RebuildResult result = rebuild(in, o);
+  CHECK(result.report.kept_patches >= 2);
+  check_tetgen_ready(result, "rebuild_avoid.off");
+  const std::set<std::array<Point3d, 3>> kept = test::faces_by_position(result.soup);
+  std::size_t far = 0, lost = 0;
+  for (const auto& f : test::faces_by_position(in)) {
+    bool close = false;
+    for (const Point3d& c : f)
+      for (const Point3d& t : touching) close = close || norm(sub(c, t)) <= near + 3 * result.report.cell;
+    if (close) continue;
+    ++far;
+    lost += kept.count(f) == 0;
+  }
+  CHECK(far > in.face_count() * 9 / 10);
+  CHECK(lost == 0);
 }

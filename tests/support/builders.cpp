@@ -7,6 +7,8 @@
 #include <fstream>
 #include <map>
 
+#include "polyheal/mesh/vec3.h"
+
 namespace polyheal::test {
 
 Soup soup(std::initializer_list<Point3d> points, std::initializer_list<std::array<Index, 3>> faces) {
@@ -108,6 +110,38 @@ bool tetgen_meshes(const std::string& path, const std::string& name, const std::
   const std::string copy = scratch(name);
   std::filesystem::copy_file(path, copy, std::filesystem::copy_options::overwrite_existing);
   return run("tetgen " + switches + " '" + copy + "' >/dev/null 2>&1; echo \"exit=$?\"").find("exit=0") != std::string::npos;
+}
+
+Soup touching_spheres(bool over_face, std::array<Point3d, 2>& touching) {
+  const Soup a = icosphere(1, 3);
+  const Point3d contact{0, 0, 1};
+  Point3d shift{0, 0, 2 + 1e-10};  // a's top vertex (0, 0, 1) under b's bottom one (0, 0, -1)
+  if (over_face) {
+    std::size_t f = 0;
+    while (f < a.face_count() && a.points[a.face(f)[0]] != contact && a.points[a.face(f)[1]] != contact &&
+           a.points[a.face(f)[2]] != contact)
+      ++f;
+    const Point3d &p = a.points[a.face(f)[0]], &q = a.points[a.face(f)[1]], &r = a.points[a.face(f)[2]];
+    const Point3d c = mul(add(add(p, q), r), 1.0 / 3);
+    const Point3d n = cross(sub(q, p), sub(r, p));
+    const double x = c[0] / 2, y = c[1] / 2;  // halfway from the top vertex to the centroid
+    const double z = p[2] - (n[0] * (x - p[0]) + n[1] * (y - p[1])) / n[2];  // on the face's plane
+    shift = {x, y, z + 1 + 1e-10};
+  }
+  touching = {contact, add(Point3d{0, 0, -1}, shift)};
+  Soup b = a;
+  for (Point3d& p : b.points) p = add(p, shift);
+  return concat(a, b);
+}
+
+double ring_radius(const Soup& s, const Point3d& v) {
+  double r = 0;
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    const FaceView t = s.face(f);
+    if (std::none_of(t.begin(), t.end(), [&](Index i) { return s.points[i] == v; })) continue;
+    for (Index i : t) r = std::max(r, norm(sub(s.points[i], v)));
+  }
+  return r;
 }
 
 std::set<std::array<Point3d, 3>> faces_by_position(const Soup& s) {

@@ -24,6 +24,16 @@ Soup concat(const Soup& a, const Soup& b);
 /// A sphere of radius r about the origin: an icosahedron subdivided
 /// `levels` times, its vertices pushed onto the sphere (20 * 4^levels faces).
 Soup icosphere(double r, int levels);
+/// Two icospheres (1280 faces each), b over a, their closest vertices or
+/// faces 1e-10 apart: closed and disjoint, so certified clean, but closer
+/// than TetGen's shortest edge — an assembly whose parts touch within a
+/// tolerance. `over_face`: b's bottom vertex over the inside of a face of
+/// a's top vertex (both spheres are symmetric through their centres, so that
+/// face and one of b's lie parallel, 1e-10 apart), else over a's top vertex.
+/// `touching`: a's top vertex and b's bottom vertex.
+Soup touching_spheres(bool over_face, std::array<Point3d, 2>& touching);
+/// How far the corners of the faces round the vertex at `v` reach from it.
+double ring_radius(const Soup& s, const Point3d& v);
 
 /// The faces as triples of corner positions, each rotated to start at its
 /// smallest corner (orientation kept): compares surfaces whatever their

@@ -450,6 +450,12 @@ bool is_nearly_on_segment(const Point3d& p, const Point3d& a, const Point3d& b, 
   });
 }
 
+int orientation_sign(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& d) {
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  auto pt = [](const Point3d& p) { return K::Point_3(p[0], p[1], p[2]); };
+  return static_cast<int>(CGAL::orientation(pt(a), pt(b), pt(c), pt(d)));
+}
+
 bool is_closer_than(const Point3d& p, const Point3d& q, double tol) {
   if (p == q) return false;
   return filtered([&](auto nt) {

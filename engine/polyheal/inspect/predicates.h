@@ -65,6 +65,11 @@ bool segments_closer_than(const Point3d& a, const Point3d& b, const Point3d& c, 
 /// segments it is).
 bool point_closer_than_to_triangle(const Point3d& p, const Point3d& a, const Point3d& b, const Point3d& c, double tol);
 
+/// Exact sign of det[b - a, c - a, d - a] (CGAL::orientation of the doubles
+/// given): +1, 0 or -1 as d lies on one side of plane abc, on it, or on the
+/// other.
+int orientation_sign(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& d);
+
 /// True when p and q are distinct and strictly closer than `tol` (exactly:
 /// |pq|^2 < tol^2 on the doubles given): TetGen merges two such points
 /// when tol is its shortest allowed edge (-T times the bbox diagonal).

@@ -20,6 +20,7 @@
 #include "polyheal/repair/degenerate.h"
 #include "polyheal/repair/deintersect.h"
 #include "polyheal/repair/detail/distance.h"
+#include "polyheal/repair/near_sheets.h"
 #include "polyheal/repair/rebuild.h"
 #include "polyheal/repair/regularize.h"
 #include "polyheal/repair/short_edges.h"
@@ -476,7 +477,10 @@ class Pipeline {
   /// better than the current one.
   void tetgen_pass(double tolerance = -1) {
     if (!cur_.report.close_vertices.empty()) short_edges();
-    if (tetgen_pass_due() && !cur_.report.close_vertices.empty()) weld_close_vertices();
+    const Report& r = cur_.report;
+    if (tetgen_pass_due() && !(r.vertices_near_faces.empty() && r.edges_near_edges.empty() &&
+                               r.close_vertices.empty() && r.vertices_near_edges.empty()))
+      separate();
     const State before = cur_;
     if (tetgen_pass_due()) tetgen_shapes(tolerance, false, before);
     if (tetgen_pass_due()) tetgen_shapes(tolerance, true, before);
@@ -497,34 +501,24 @@ class Pipeline {
     });
   }
 
-  /// Close points that share no edge (two parts or sheets nearly touching
-  /// at a vertex: short_edges() leaves them) are welded into one, and the
-  /// union of the welded surface taken: where it pinches at the welded
-  /// point, each cone gets its own vertex, moved 1% of the local edge into
-  /// it (regularize.h) — far beyond TetGen's shortest edge, and far less
-  /// than the overlay grid would move (it joins the parts by a neck a cell
-  /// wide). Two spheres 1e-10 apart: 2548 of 2560 faces kept, the surface
-  /// moved 0.03% of the diagonal, against 1.2% and one component through
-  /// the grid.
-  void weld_close_vertices() {
-    stage("weld close vertices (TetGen)", [&](StageReport& s) {
-      CleanSoupOptions co;
-      co.weld = InspectOptions{}.tetgen_epsilon * bbox_diagonal(cur_.report);
-      co.fill_holes = false;
-      const CleanSoupResult c = clean_soup(cur_.soup, co);
-      s.max_displacement = c.report.max_weld_move;
-      RegularizeOptions ro;
-      ro.certify = false;
-      ro.observer = o_.observer;
-      RegularizeResult res = polyheal::regularize(c.soup, ro);
-      s.counts = {{"close_vertices_before", double(cur_.report.close_vertices.size())},
-                  {"welded_near", double(c.report.near_vertices_welded)},
-                  {"intersecting_pairs", double(res.report.intersecting_pairs_in)}};
-      s.outcome = std::to_string(c.report.near_vertices_welded) + " of " +
-                  std::to_string(cur_.report.close_vertices.size()) +
-                  " vertex pairs closer than TetGen's shortest edge welded; the union of the result: " +
-                  std::to_string(res.report.intersecting_pairs_in) + " intersecting pairs";
-      return std::move(res.soup);
+  /// What is still closer than TetGen's shortest edge without sharing a
+  /// vertex there (parts face to face, a vertex over another part's face,
+  /// crossing edges) is pushed apart, twice that distance per round
+  /// (near_sheets.h). Kept only if certified clean.
+  void separate() {
+    stage("separate near sheets (TetGen)", [&](StageReport& s) {
+      SeparateReport r;
+      Soup out = separate_near_sheets(cur_.soup, SeparateOptions{}, r);
+      s.max_displacement = r.max_displacement;
+      s.counts = {{"pairs_before", double(r.pairs_before)},
+                  {"pairs_after", double(r.pairs_after)},
+                  {"moved_vertices", double(r.moved_vertices)},
+                  {"moves_refused", double(r.refused)}};
+      s.outcome = std::to_string(r.pairs_before) + " pairs closer than TetGen's shortest edge, " +
+                  std::to_string(r.pairs_after) + " left; " + std::to_string(r.moved_vertices) +
+                  " vertices moved apart in " + std::to_string(r.rounds) + " rounds, " + std::to_string(r.refused) +
+                  " moves refused (a face would intersect or degenerate)";
+      return out;
     }, false, true);
   }
 

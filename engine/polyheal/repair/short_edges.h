@@ -13,8 +13,8 @@
 // vertex that a defect involves (a degenerate face, an intersection) are
 // refused and the sequence is made again, until nothing is left to refuse.
 // Close points that share no edge (two sheets within 1e-8 of each other)
-// are not merged: that would change the topology; the caller's TetGen check
-// still counts them.
+// are not merged: that would change the topology; near_sheets.h pushes them
+// apart.
 #pragma once
 
 #include <cstddef>
