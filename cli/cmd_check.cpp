@@ -218,6 +218,9 @@ void print_text(const CheckArgs& args, const Report& r, double total_s) {
     print_list<FacePair>("face pairs TetGen merges whose flip cuts another face", r.flip_hazards, pair);
   }
   const bool ok = args.tetgen_ready ? r.tetgen_ready() : r.certified_clean();
+  if (!ok && args.tetgen_ready && r.certified_clean())
+    std::printf("  (`polyheal repair --for tetgen` removes these: short edges collapsed, close parts pushed apart, "
+                "folds and slivers collapsed, else the overlay grid where they are)\n");
   std::printf("  => %s (%.3f s)\n",
               ok ? (args.tetgen_ready ? "CERTIFIED CLEAN and TetGen-ready" : "CERTIFIED CLEAN")
                  : (args.tetgen_ready && r.certified_clean() ? "clean, but NOT TetGen-ready" : "DEFECTS FOUND"),
