@@ -7,6 +7,7 @@
 
 #include "polyheal/inspect/predicates.h"
 #include "polyheal/inspect/report.h"
+#include "polyheal/inspect/self_intersections.h"
 #include "polyheal/mesh/vec3.h"
 #include "polyheal/mesh/weld.h"
 
@@ -92,14 +93,25 @@ std::size_t pair_count(const Report& r) {
          r.vertices_near_edges.size();
 }
 
-/// The vertices of faces an exact defect involves (degenerate, intersecting).
-std::vector<Index> defect_corners(const Soup& s, const Report& r) {
+/// The corners of the faces of `next` that moves from `cur` made intersect
+/// another face or degenerate (exactly; the other faces are as they were in
+/// the clean `cur`, and moves change no connectivity).
+std::vector<Index> defect_corners(const Soup& cur, const Soup& next) {
+  const std::size_t F = next.face_count();
+  std::vector<char> changed(F, 0);
+  for (std::size_t f = 0; f < F; ++f)
+    for (Index i : next.face(f)) changed[f] |= next.points[i] != cur.points[i];
   std::vector<Index> v;
   auto face = [&](std::size_t f) {
-    for (Index i : s.face(f)) v.push_back(i);
+    for (Index i : next.face(f)) v.push_back(i);
   };
-  for (std::size_t f : r.degenerate_faces) face(f);
-  for (const FacePair& p : r.self_intersections) {
+  for (std::size_t f = 0; f < F; ++f) {
+    const FaceView t = next.face(f);
+    if (changed[f] && is_collinear(next.points[t[0]], next.points[t[1]], next.points[t[2]])) face(f);
+  }
+  SelfIntersectionOptions only;
+  only.only = &changed;
+  for (const FacePair& p : find_self_intersections(next, only)) {
     face(p.first);
     face(p.second);
   }
@@ -108,7 +120,7 @@ std::vector<Index> defect_corners(const Soup& s, const Report& r) {
 
 }  // namespace
 
-Soup separate_near_sheets(const Soup& clean, const SeparateOptions& o, SeparateReport& r) {
+Soup separate_near_sheets(const Soup& clean, const SeparateOptions& o, SeparateReport& r, const Report* known) {
   r = SeparateReport{};
   Soup cur = apply_weld(clean, weld_identical_points(clean.points));
   if (!cur.is_triangle_soup()) return cur;
@@ -116,12 +128,12 @@ Soup separate_near_sheets(const Soup& clean, const SeparateOptions& o, SeparateR
   InspectOptions tetgen;
   tetgen.tetgen_segments = true;
   tetgen.tetgen_epsilon = o.epsilon;
-  Report rep = inspect(cur, tetgen);
+  // The caller's report names vertices by the same ids when welding changed nothing.
+  Report rep = known && known->vertices_near_edges_checked && cur.points == clean.points ? *known : inspect(cur, tetgen);
   if (!rep.certified_clean()) return cur;
   r.pairs_before = r.pairs_after = pair_count(rep);
   const double step = o.step * o.epsilon * bbox_diagonal(rep);
   std::vector<char> frozen(cur.points.size(), 0);
-  const InspectOptions exact;
   for (; r.rounds < o.max_rounds && pair_count(rep) > 0; ++r.rounds) {
     const std::vector<Point3d> want = wishes(cur, rep);
     std::vector<Index> moving;
@@ -133,10 +145,10 @@ Soup separate_near_sheets(const Soup& clean, const SeparateOptions& o, SeparateR
     // Undo, and freeze, the moves of the corners of faces that now
     // intersect or degenerate, until none do.
     for (;;) {
-      const Report after = inspect(next, exact);
-      if (after.certified_clean()) break;
       std::size_t undone = 0;
-      for (Index v : defect_corners(next, after))
+      const std::vector<Index> bad = defect_corners(cur, next);
+      if (bad.empty()) break;
+      for (Index v : bad)
         if (next.points[v] != cur.points[v]) {
           next.points[v] = cur.points[v];
           frozen[v] = 1;

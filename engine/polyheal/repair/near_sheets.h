@@ -23,6 +23,8 @@
 
 namespace polyheal {
 
+struct Report;
+
 struct SeparateOptions {
   double epsilon = 1e-8;  // TetGen's -T, relative to the bbox diagonal
   double step = 2;        // each move, in units of epsilon x diagonal
@@ -38,9 +40,12 @@ struct SeparateReport {
   int rounds = 0;
 };
 
-/// `clean`: a certified clean surface. The result is certified clean too
-/// (exactly, on its doubles), with the same faces (the same corners, some
-/// of them moved); pairs_after tells what is still too close.
-Soup separate_near_sheets(const Soup& clean, const SeparateOptions& options, SeparateReport& report);
+/// `clean`: a certified clean surface; `known`, when given, its inspection
+/// with TetGen's segments (InspectOptions::tetgen_segments, epsilon as in
+/// `options`): not made again. The result is certified clean too (exactly,
+/// on its doubles), with the same faces (the same corners, some of them
+/// moved); pairs_after tells what is still too close.
+Soup separate_near_sheets(const Soup& clean, const SeparateOptions& options, SeparateReport& report,
+                          const Report* known = nullptr);
 
 }  // namespace polyheal

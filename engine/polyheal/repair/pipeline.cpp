@@ -508,7 +508,7 @@ class Pipeline {
   void separate() {
     stage("separate near sheets (TetGen)", [&](StageReport& s) {
       SeparateReport r;
-      Soup out = separate_near_sheets(cur_.soup, SeparateOptions{}, r);
+      Soup out = separate_near_sheets(cur_.soup, SeparateOptions{}, r, &cur_.report);
       s.max_displacement = r.max_displacement;
       s.counts = {{"pairs_before", double(r.pairs_before)},
                   {"pairs_after", double(r.pairs_after)},
