@@ -106,7 +106,7 @@ PerturbResult perturb(const Soup& input, const PerturbOptions& o) {
       const Point3d &a = pts[f[0]], &b = pts[f[1]], &c = pts[f[2]];
       if (o.kind == PerturbKind::near_coplanar) {
         // Centroid lifted off the plane: three faces within epsilon of coplanar.
-        const Point3d n = cross(sub(b, a), sub(c, a));
+        const Point3d n = normal(a, b, c);
         const double len = norm(n);
         Point3d g{(a[0] + b[0] + c[0]) / 3, (a[1] + b[1] + c[1]) / 3, (a[2] + b[2] + c[2]) / 3};
         if (len > 0) g = along(g, n, (rng.unit() < 0.5 ? -1 : 1) * o.epsilon * longest_edge(a, b, c) / len);

@@ -21,6 +21,8 @@ inline double dot(const Point3d& a, const Point3d& b) { return a[0] * b[0] + a[1
 inline Point3d cross(const Point3d& a, const Point3d& b) {
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
 }
+/// (b - a) x (c - a): twice triangle abc's area vector (doubles; a measurement).
+inline Point3d normal(const Point3d& a, const Point3d& b, const Point3d& c) { return cross(sub(b, a), sub(c, a)); }
 inline double squared_norm(const Point3d& a) { return dot(a, a); }
 inline double norm(const Point3d& a) { return std::sqrt(dot(a, a)); }
 /// The angle between a and b in radians (atan2: accurate near 0 and pi).

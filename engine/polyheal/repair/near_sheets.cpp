@@ -14,8 +14,6 @@
 namespace polyheal {
 namespace {
 
-Point3d normal(const Point3d& a, const Point3d& b, const Point3d& c) { return cross(sub(b, a), sub(c, a)); }
-
 Point3d unit(const Point3d& v) {
   const double l = norm(v);
   return l > 0 ? mul(v, 1 / l) : Point3d{0, 0, 0};
@@ -88,11 +86,6 @@ std::vector<Point3d> wishes(const Soup& s, const Report& r) {
   return want;
 }
 
-std::size_t pair_count(const Report& r) {
-  return r.vertices_near_faces.size() + r.edges_near_edges.size() + r.close_vertices.size() +
-         r.vertices_near_edges.size();
-}
-
 /// The corners of the faces of `next` that moves from `cur` made intersect
 /// another face or degenerate (exactly; the other faces are as they were in
 /// the clean `cur`, and moves change no connectivity).
@@ -120,6 +113,11 @@ std::vector<Index> defect_corners(const Soup& cur, const Soup& next) {
 
 }  // namespace
 
+std::size_t close_pair_count(const Report& r) {
+  return r.vertices_near_faces.size() + r.edges_near_edges.size() + r.close_vertices.size() +
+         r.vertices_near_edges.size();
+}
+
 Soup separate_near_sheets(const Soup& clean, const SeparateOptions& o, SeparateReport& r, const Report* known) {
   r = SeparateReport{};
   Soup cur = apply_weld(clean, weld_identical_points(clean.points));
@@ -131,10 +129,10 @@ Soup separate_near_sheets(const Soup& clean, const SeparateOptions& o, SeparateR
   // The caller's report names vertices by the same ids when welding changed nothing.
   Report rep = known && known->vertices_near_edges_checked && cur.points == clean.points ? *known : inspect(cur, tetgen);
   if (!rep.certified_clean()) return cur;
-  r.pairs_before = r.pairs_after = pair_count(rep);
+  r.pairs_before = r.pairs_after = close_pair_count(rep);
   const double step = o.step * o.epsilon * bbox_diagonal(rep);
   std::vector<char> frozen(cur.points.size(), 0);
-  for (; r.rounds < o.max_rounds && pair_count(rep) > 0; ++r.rounds) {
+  for (; r.rounds < o.max_rounds && close_pair_count(rep) > 0; ++r.rounds) {
     const std::vector<Point3d> want = wishes(cur, rep);
     std::vector<Index> moving;
     for (std::size_t v = 0; v < want.size(); ++v)
@@ -162,10 +160,10 @@ Soup separate_near_sheets(const Soup& clean, const SeparateOptions& o, SeparateR
     }
     if (next.points == cur.points) break;
     Report next_rep = inspect(next, tetgen);
-    if (pair_count(next_rep) >= pair_count(rep)) break;  // no better: the moves only shuffle what is close
+    if (close_pair_count(next_rep) >= close_pair_count(rep)) break;  // no better: the moves only shuffle what is close
     cur = std::move(next);
     rep = std::move(next_rep);
-    r.pairs_after = pair_count(rep);
+    r.pairs_after = close_pair_count(rep);
   }
   for (std::size_t v = 0; v < cur.points.size(); ++v)
     if (cur.points[v] != start[v]) {

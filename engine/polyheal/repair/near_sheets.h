@@ -6,8 +6,8 @@
 // anything there: parts of an assembly lying face to face 1e-10 apart, a
 // vertex of one part just over a face of another, two edges crossing 1e-10
 // apart. TetGen then merges what it cannot tell apart and stops. No
-// collapse or flip changes that, and welding applies only where two
-// vertices meet (short_edges.h, and the pipeline's weld stage). Here each
+// collapse or flip changes that, and collapsing applies only where two
+// vertices share a short edge (short_edges.h). Here each
 // vertex that such a pair involves moves a little — twice the tolerance —
 // away from the other simplex, along the direction that separates them
 // (the side is decided by an exact orientation; the move itself is a double
@@ -39,6 +39,11 @@ struct SeparateReport {
   double max_displacement = 0;     // largest distance a vertex moved
   int rounds = 0;
 };
+
+/// The pairs of `r` (inspected with TetGen's segments) this works on:
+/// vertex-face, edge-edge, vertex-vertex and vertex-edge pairs closer than
+/// TetGen's shortest edge.
+std::size_t close_pair_count(const Report& r);
 
 /// `clean`: a certified clean surface; `known`, when given, its inspection
 /// with TetGen's segments (InspectOptions::tetgen_segments, epsilon as in

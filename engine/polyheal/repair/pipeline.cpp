@@ -477,10 +477,7 @@ class Pipeline {
   /// better than the current one.
   void tetgen_pass(double tolerance = -1) {
     if (!cur_.report.close_vertices.empty()) short_edges();
-    const Report& r = cur_.report;
-    if (tetgen_pass_due() && !(r.vertices_near_faces.empty() && r.edges_near_edges.empty() &&
-                               r.close_vertices.empty() && r.vertices_near_edges.empty()))
-      separate();
+    if (tetgen_pass_due() && close_pair_count(cur_.report) > 0) separate();
     const State before = cur_;
     if (tetgen_pass_due()) tetgen_shapes(tolerance, false, before);
     if (tetgen_pass_due()) tetgen_shapes(tolerance, true, before);

@@ -78,12 +78,6 @@ std::vector<Region> boundary_loop_regions(const Soup& s, const Topology& topo) {
   return out;
 }
 
-/// (b - a) x (c - a): twice the triangle's area vector (doubles; a measurement).
-Point3d normal(const Point3d& a, const Point3d& b, const Point3d& c) {
-  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  return {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-}
-
 /// 1 - cos of the triangle's smallest angle (larger is better; a measurement).
 /// cos 179 degrees: faces whose normals are further apart fold onto each
 /// other (TetGen refuses such "nearly self-intersecting" facets). Computed
