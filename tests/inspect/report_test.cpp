@@ -467,6 +467,25 @@ TEST_CASE("nesting: inside-out components are those with negative volume inside 
     const Nesting after = nesting(turned_outward(s, n));
     CHECK(after.volume_sign == std::vector<int>{1, -1, 1});
   }
+  SECTION("crossing components: an inverted box mostly outside the other turns, a cavity through a wall stays") {
+    // [1,3]^3 inverted across [0,2]^3's corner: an eighth of its area inside
+    const Soup overlap = test::concat(test::box({0, 0, 0}, {2, 2, 2}), reversed(test::box({1, 1, 1}, {3, 3, 3})));
+    REQUIRE_FALSE(inspect(overlap).self_intersections.empty());
+    const Nesting n = nesting(overlap, true);
+    CHECK(n.inside_out_count == 1);
+    CHECK(n.cavity_count == 0);
+    CHECK(turned_by_part(n, {0, 12}) == std::vector<int>{0, 1});
+    // a cavity 3.5 high in a box 4 high, through its top: 8 of 36 area units outside
+    const Soup through = test::concat(test::box({0, 0, 0}, {4, 4, 4}), reversed(test::box({1, 1, 1}, {3, 3, 4.5})));
+    REQUIRE_FALSE(inspect(through).self_intersections.empty());
+    const Nesting c = nesting(through, true);
+    CHECK(c.inside_out_count == 0);
+    CHECK(c.cavity_count == 1);
+    CHECK(turned_by_part(c, {0, 12}) == std::vector<int>{0, 0});
+    // the cavity turned out by its depth rule: a box inside out around it
+    const Nesting both = nesting(reversed(through), true);
+    CHECK(turned_by_part(both, {0, 12}) == std::vector<int>{1, 1});
+  }
   SECTION("an outward part inside a solid is left as it is (embedded, not a cavity gone wrong)") {
     const Soup s = test::concat(outer, inner);
     const Report r = inspect(s);

@@ -510,7 +510,8 @@ TEST_CASE("repair: overlapping boxes inside out are united turned outwards (thei
   REQUIRE(inspect(in).volume_sign == -1);
   REQUIRE_FALSE(inspect(in).self_intersections.empty());
   const RepairResult r = repair(in);
-  CHECK(ran(r.report, "regularize (turned outwards)", true));
+  CHECK(ran(r.report, "orient", true));  // each box: the greater part of its area outside the other
+  CHECK(ran(r.report, "regularize", true));
   CHECK_FALSE(ran(r.report, "rebuild", true));
   const Assessment a = written(in, r, "pipe_boxes_inside_out.off", 0.01 * r.report.diagonal);
   CHECK(a.certified);
@@ -522,6 +523,36 @@ TEST_CASE("repair: overlapping boxes inside out are united turned outwards (thei
   RepairOptions keep;
   keep.orient_outward = false;
   const RepairResult k = repair(in, keep);
+  CHECK_FALSE(ran(k.report, "orient", true));
   CHECK_FALSE(ran(k.report, "regularize (turned outwards)", true));
   CHECK_FALSE(ran(k.report, "regularize", true));
+}
+
+TEST_CASE("repair: an inverted part crossing its neighbour is turned and united, not cut away; a cavity through a "
+          "wall stays a cavity",
+          "[pipeline]") {
+  // An assembly whose second box faces inwards and overlaps the first by a
+  // corner: taken as it is, the union is the first box minus the second.
+  const Soup in = test::concat(test::box({0, 0, 0}, {2, 2, 2.5}), reversed(test::box({1, 1, 1}, {3, 3, 3})));
+  REQUIRE(inspect(in).signed_volume == Approx(10.0 - 8.0));  // the whole is not inside out
+  const RepairResult r = repair(in);
+  CHECK(ran(r.report, "orient", true));
+  const Assessment a = written(in, r, "pipe_inverted_part.off", 0.01 * r.report.diagonal, true);
+  CHECK(a.certified);
+  CHECK(a.within_deviation);
+  CHECK(a.deviation == Approx(0).margin(1e-12));  // nothing moved: the second box's corner inside is absorbed
+  CHECK(a.components_out == 1);
+  CHECK(a.out.signed_volume == Approx(16.5));  // 10 + 8 - 1.5
+  RepairOptions keep;
+  keep.orient_outward = false;
+  const RepairResult k = repair(in, keep);
+  CHECK_FALSE(ran(k.report, "orient", true));
+  CHECK(inspect(k.soup).signed_volume == Approx(8.5));  // the difference, as given
+  // A cavity 3.5 high in a box 4 high breaks through its top: the greater
+  // part of its area is inside, it stays a cavity and the union opens it.
+  const Soup through = test::concat(test::box({0, 0, 0}, {4, 4, 4}), reversed(test::box({1, 1, 1}, {3, 3, 4.5})));
+  const RepairResult t = repair(through);
+  CHECK_FALSE(ran(t.report, "orient", true));
+  CHECK(inspect(t.soup).certified_clean());
+  CHECK(inspect(t.soup).signed_volume == Approx(64.0 - 12.0));
 }

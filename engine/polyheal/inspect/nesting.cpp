@@ -12,6 +12,7 @@
 #include <unordered_map>
 
 #include "polyheal/inspect/predicates.h"
+#include "polyheal/mesh/vec3.h"
 #include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/weld.h"
 
@@ -32,6 +33,11 @@ struct Box {
       if (lo[k] < o.lo[k] || hi[k] > o.hi[k]) return false;
     return true;
   }
+  bool meets(const Box& o) const {
+    for (int k = 0; k < 3; ++k)
+      if (hi[k] < o.lo[k] || o.hi[k] < lo[k]) return false;
+    return true;
+  }
 };
 
 /// One component as a Surface_mesh with its point-in-volume test, built on
@@ -43,7 +49,7 @@ struct Solid {
 
 }  // namespace
 
-Nesting nesting(const Soup& soup) {
+Nesting nesting(const Soup& soup, bool crossing) {
   Nesting n;
   const Soup welded = apply_weld(soup, weld_identical_points(soup.points));
   const Topology t = analyze_topology(welded);
@@ -91,18 +97,57 @@ Nesting nesting(const Soup& soup) {
     }
     return *s.side;
   };
-  // c inside d: disjoint closed surfaces, so one vertex of c decides (it is
+  // c inside d. Disjoint closed surfaces: one vertex of c decides (it is
   // never on d's boundary; were it, c would touch d and not be certified).
-  auto inside = [&](std::size_t c, std::size_t d) {
+  // Crossing ones: the greater part of c's area, sampled (below).
+  auto one_vertex_inside = [&](std::size_t c, std::size_t d) {
     if (c == d || !box[c].within(box[d])) return false;
     const Point3d& p = welded.points[some_vertex[c]];
     return solid(d)(K::Point_3(p[0], p[1], p[2])) == CGAL::ON_BOUNDED_SIDE;
   };
+  // The share of c's area (kSamples faces spread over its list, each
+  // standing for its area at its centroid; every face when fewer) strictly
+  // inside a component that `in_one_of` accepts. A centroid is rounded to
+  // doubles; the side test on it is exact.
+  constexpr std::size_t kSamples = 64;
+  auto area_share_inside = [&](std::size_t c, const std::function<bool(std::size_t)>& in_one_of) {
+    std::vector<std::size_t> others;
+    for (std::size_t d = 0; d < n.components; ++d)
+      if (d != c && box[c].meets(box[d]) && in_one_of(d)) others.push_back(d);
+    if (others.empty()) return 0.0;
+    const std::vector<std::size_t>& fc = faces[c];
+    const std::size_t samples = std::min(kSamples, fc.size());
+    double inside_area = 0, all_area = 0;
+    for (std::size_t k = 0; k < samples; ++k) {
+      const FaceView v = welded.face(fc[k * fc.size() / samples]);
+      const Point3d &a = welded.points[v[0]], &b = welded.points[v[1]], &e = welded.points[v[2]];
+      const double area = norm(normal(a, b, e));
+      const Point3d m = mul(add(add(a, b), e), 1.0 / 3);
+      const K::Point_3 centroid(m[0], m[1], m[2]);
+      all_area += area;
+      for (std::size_t d : others)
+        if (solid(d)(centroid) == CGAL::ON_BOUNDED_SIDE) {
+          inside_area += area;
+          break;
+        }
+    }
+    return all_area > 0 ? inside_area / all_area : 0.0;
+  };
+  auto inside = [&](std::size_t c, std::size_t d) {
+    if (!crossing) return one_vertex_inside(c, d);
+    return c != d && area_share_inside(c, [d](std::size_t e) { return e == d; }) > 0.5;
+  };
+  auto enclosed = [&](std::size_t c) {
+    if (!crossing) {
+      for (std::size_t d = 0; d < n.components; ++d)
+        if (inside(c, d)) return true;
+      return false;
+    }
+    return area_share_inside(c, [](std::size_t) { return true; }) > 0.5;
+  };
   for (std::size_t c = 0; c < n.components; ++c) {
     if (n.volume_sign[c] >= 0) continue;
-    bool enclosed = false;
-    for (std::size_t d = 0; d < n.components && !enclosed; ++d) enclosed = inside(c, d);
-    if (enclosed) {
+    if (enclosed(c)) {
       ++n.cavity_count;
     } else {
       n.inside_out[c] = n.turned[c] = 1;

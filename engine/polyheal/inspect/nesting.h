@@ -39,7 +39,17 @@ struct Nesting {
 /// no self-intersection (Report::certified_clean()); otherwise nesting is
 /// undefined and the result meaningless. Containment is tested only where
 /// it matters (a component with negative volume), after a bounding-box test.
-Nesting nesting(const Soup& soup);
+///
+/// `crossing`: components may cross one another (each still closed and
+/// oriented; a surface before its union is taken). Then c lies inside d
+/// when the greater part of its area does (64 faces spread over c, each
+/// standing for its area at its centroid, tested against d exactly), and a
+/// component with negative volume is a cavity when the greater part of its
+/// area lies inside the others (their union), inside out otherwise: an
+/// inverted part of an assembly that overlaps its neighbours is turned, and
+/// its union with them taken, where a cavity that breaks through a wall
+/// stays one (the union then opens it).
+Nesting nesting(const Soup& soup, bool crossing = false);
 
 /// `soup` with every face reversed (the same first corner, the other way round).
 Soup reversed(const Soup& soup);

@@ -147,6 +147,9 @@ class Pipeline {
     // much, within the bound — a tie, which the current surface keeps. On
     // three overlapping copies of a 1M-face knot that union and its
     // assessment took 52 of 114 s.
+    // An inverted part that crosses its neighbours: turned first, or the
+    // moves would push it apart from them and the union cut it away.
+    if (!done()) orient_outward(true);
     std::optional<Soup> before_moves;  // the closed surface local moves started from
     if (wanted(kStepDeintersect) && !done() && !cur_.report.self_intersections.empty()) {
       const double before = cur_.hausdorff;
@@ -316,11 +319,19 @@ class Pipeline {
   /// A certified surface with components inside out (negative volume,
   /// inside no other component; inspect/nesting.h) has them turned
   /// outwards, with the components inside them: cavities stay cavities.
+  /// `crossing`: a closed, oriented surface whose components cross one
+  /// another, before the moves and the union that resolve that: a component
+  /// inside out by the greater part of its area (nesting.h) is turned, so
+  /// that the union takes it in rather than cuts it away.
   /// Moves nothing; a stage only when it turns something.
-  void orient_outward() {
-    if (!o_.orient_outward || !cur_.report.certified_clean() || cur_.report.inside_out_components == 0) return;
+  void orient_outward(bool crossing = false) {
+    if (!o_.orient_outward) return;
+    const Report& cr = cur_.report;
+    if (crossing ? !cr.closed || !cr.oriented || !cr.nonmanifold_edges.empty() || cr.self_intersections.empty()
+                 : !cr.certified_clean() || cr.inside_out_components == 0)
+      return;
     const auto t0 = std::chrono::steady_clock::now();
-    const Nesting n = nesting(cur_.soup);
+    const Nesting n = nesting(cur_.soup, crossing);
     if (n.inside_out_count == 0) return;
     if (o_.observer) o_.observer->stage("orient");
     StageReport s;
@@ -331,8 +342,8 @@ class Pipeline {
     next.soup = turned_outward(cur_.soup, n, &faces);
     // Turning faces changes no position, edge or intersection: the checks
     // are made again for the shape fields (and the caller checks the
-    // written file anyway), the intersecting pairs taken as they were (none:
-    // certified); TetGen's verdict does not depend on orientation.
+    // written file anyway), the intersecting pairs taken as they were;
+    // TetGen's verdict does not depend on orientation.
     InspectOptions io;
     io.tetgen_segments = o_.for_tetgen;
     io.self_intersections = &cur_.report.self_intersections;
@@ -351,7 +362,9 @@ class Pipeline {
                 {"components_turned", double(components)},
                 {"faces_turned", double(faces)}};
     s.outcome = std::to_string(n.inside_out_count) + " component" + (n.inside_out_count == 1 ? "" : "s") +
-                " inside out (negative volume, inside no other): " + std::to_string(components) +
+                (crossing ? " inside out (negative volume, the greater part of its area outside the others): "
+                          : " inside out (negative volume, inside no other): ") +
+                std::to_string(components) +
                 " component" + (components == 1 ? "" : "s") + " (" + std::to_string(faces) +
                 " faces) turned, so that the surface bounds a volume";
     cur_ = std::move(next);
