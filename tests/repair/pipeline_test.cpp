@@ -528,7 +528,7 @@ TEST_CASE("repair: overlapping boxes inside out are united turned outwards (thei
   CHECK_FALSE(ran(k.report, "regularize", true));
 }
 
-TEST_CASE("repair: an inverted part crossing its neighbour is turned and united, not cut away; a cavity through a "
+TEST_CASE("repair: an inverted part crossing its neighbour is turned and united, not cut away, and a cavity through a "
           "wall stays a cavity",
           "[pipeline]") {
   // An assembly whose second box faces inwards and overlaps the first by a
@@ -555,4 +555,18 @@ TEST_CASE("repair: an inverted part crossing its neighbour is turned and united,
   CHECK_FALSE(ran(t.report, "orient", true));
   CHECK(inspect(t.soup).certified_clean());
   CHECK(inspect(t.soup).signed_volume == Approx(64.0 - 12.0));
+}
+
+TEST_CASE("repair: a box set flush into another (their shared face given twice) comes out as the block, nothing moved",
+          "[pipeline]") {
+  // What a CAD assembly export gives for a part flush with the block it sits
+  // in: the shared face twice, the sides over each other.
+  const Soup in = test::concat(test::box({0, 0, 0}, {1, 1, 1}), test::box({0, 0, 0}, {1, 1, 0.5}));
+  const RepairResult r = repair(in);
+  const Assessment a = written(in, r, "pipe_flush_part.off", 0.01 * r.report.diagonal, true);
+  CHECK(a.certified);
+  CHECK(a.within_deviation);
+  CHECK(a.deviation == Approx(0).margin(1e-12));
+  CHECK(a.out.signed_volume == Approx(1.0));
+  CHECK(a.faces_kept == 12);
 }

@@ -334,6 +334,21 @@ TEST_CASE("regularize: walls and faces doubled in one direction are left out fir
     CHECK(rep.signed_volume == Approx(2).epsilon(1e-12));
     CHECK_FALSE(any_face_at(out, 1));
   }
+  SECTION("a box set flush into another (sharing its face at x = 0, welded): the nested box's faces are the wall") {
+    // Both the nested box's five exposed sides and the block's five around
+    // them hang off the shared rim and balance it; only the first lies
+    // inside what is kept. Either order of the two in the file.
+    const Soup block = box({{{0, 0, 0}, {1, 1, 1}}}), part = without_faces_at(box({{{0, 0, 0}, {0.5, 1, 1}}}), 0);
+    for (const Soup& in : {test::concat(block, part), test::concat(part, block)}) {
+      const RegularizeResult r = regularize(in);
+      CHECK(r.report.walls_left_out == 10);
+      const Soup out = written(r, "regularize_flush_part.off");
+      const Report rep = inspect(out);
+      CHECK(rep.certified_clean());
+      CHECK(rep.signed_volume == Approx(1).epsilon(1e-12));  // the block, not the part
+      CHECK(r.report.faces_kept == 12);
+    }
+  }
   SECTION("the corpus case: V-HACD's deer_bound (one wall, one doubled face), and TetGen meshes the output") {
     const Soup in = read_soup(test::fixture("deer_bound.off"));
     REQUIRE_FALSE(test::tetgen_meshes(test::fixture("deer_bound.off"), "regularize_in_deer_bound.off"));

@@ -158,7 +158,8 @@ Topology analyze_topology(const Soup& soup) {
   return t;
 }
 
-SheetsLeftOut sheets_to_leave_out(const Soup& soup, bool flaps) {
+SheetsLeftOut sheets_to_leave_out(const Soup& soup, bool flaps,
+                                  const std::function<bool(const std::vector<std::size_t>&)>& may_leave_out) {
   const Topology t = analyze_topology(soup);
   auto sign = [](const EdgeUse& u) { return u.from < u.to ? 1L : -1L; };
   struct Rim {
@@ -223,6 +224,10 @@ SheetsLeftOut sheets_to_leave_out(const Soup& soup, bool flaps) {
         long gain = 0;
         for (const auto& [k, use] : sh->rim) gain += std::abs(rims[k].balance) - std::abs(rims[k].balance - use.first);
         if (gain <= 0) continue;
+        if (may_leave_out && !may_leave_out(sh->faces)) {  // faces: in order, from the loop above
+          sh->done = true;
+          continue;
+        }
         for (const auto& [k, use] : sh->rim) {
           rims[k].balance -= use.first;
           rims[k].uses -= use.second;

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "polyheal/mesh/soup.h"
@@ -69,6 +70,12 @@ inline std::uint64_t undirected_edge_key(Index a, Index b) {
 /// rim edges, of which it needs one). So a hole stays a hole (its rim is
 /// used once by the faces around it) and faces turned the wrong way stay
 /// (two uses in one direction: an orientation defect).
+///
+/// `may_leave_out`, when given, is asked before a sheet is left out (its
+/// faces, sorted); false keeps it, and it is not asked again. (Which of two
+/// sheets that balance the same edges is the wall is geometry: a solid
+/// sharing faces with the part nested in it has both the part's exposed
+/// faces and its own around them hanging off the shared rim.)
 struct SheetsLeftOut {
   std::vector<std::size_t> faces;  // sorted
   long imbalance = 0;              // of what is kept
@@ -77,6 +84,7 @@ struct SheetsLeftOut {
   Index unbalanced_a = 0, unbalanced_b = 0;
   long unbalanced_by = 0;
 };
-SheetsLeftOut sheets_to_leave_out(const Soup& soup, bool flaps);
+SheetsLeftOut sheets_to_leave_out(const Soup& soup, bool flaps,
+                                  const std::function<bool(const std::vector<std::size_t>&)>& may_leave_out = {});
 
 }  // namespace polyheal

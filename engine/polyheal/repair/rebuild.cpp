@@ -38,6 +38,7 @@
 #include "polyheal/repair/detail/exact_meet.h"
 #include "polyheal/repair/detail/plane_meet.h"
 #include "polyheal/repair/detail/shape_decimation.h"
+#include "polyheal/repair/detail/winding.h"
 
 namespace polyheal {
 namespace {
@@ -46,6 +47,7 @@ using IK = InputKernel;  // the input's doubles: exact filtered predicates
 using IPoint = IK::Point_3;
 using K = Kernel;        // Epeck: the crossing parameters
 using Tri = std::array<Index, 3>;
+using detail::WindingNumber;
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -320,135 +322,6 @@ double largest_gap(const Facets& f, const detail::SurfaceDistance& surface, doub
   });
   return *std::max_element(gap.begin(), gap.end());
 }
-
-// ---------------------------------------------------------------------------
-// Generalised winding number (Jacobson et al. 2013), hierarchically (Barill et
-// al. 2018): far clusters by their dipole term, near triangles by their exact
-// solid angle (Van Oosterom & Strackee). A measurement in doubles: it labels
-// grid corners, it decides no geometric predicate of the output.
-
-class WindingNumber {
- public:
-  explicit WindingNumber(const Facets& f) : f_(f) {
-    order_.resize(f.tris.size());
-    std::iota(order_.begin(), order_.end(), 0);
-    centroid_.resize(f.tris.size());
-    for (std::size_t t = 0; t < f.tris.size(); ++t)
-      for (int a = 0; a < 3; ++a)
-        centroid_[t][a] = (P(t, 0)[a] + P(t, 1)[a] + P(t, 2)[a]) / 3;
-    if (order_.empty()) return;
-    nodes_.resize(1);
-    build(0, 0, order_.size());
-  }
-
-  /// The winding number at q. Far clusters are approximated (error a few
-  /// percent at most); a value near the 1/2 threshold is evaluated again
-  /// with a stricter far field, so that the approximation does not decide.
-  double operator()(const Point3d& q) const {
-    const double w = evaluate(q, kBeta);
-    return std::abs(w - 0.5) < 0.05 ? evaluate(q, kBetaStrict) : w;
-  }
-  /// The winding number at q, a point inside triangle t, but for t's own
-  /// solid angle (there ±2π by the sign of a zero): the mean of its values
-  /// on the two sides, an integer plus 1/2 (the ordinary far field is
-  /// enough to round it).
-  double on_face(const Point3d& q, std::size_t t) const { return evaluate(q, kBeta) - solid_angle(t, q) / (4 * M_PI); }
-
- private:
-  static constexpr double kBeta = 2.5, kBetaStrict = 8;
-  static constexpr std::size_t kLeaf = 8;
-
-  double evaluate(const Point3d& q, double beta) const {
-    if (nodes_.empty()) return 0;
-    double sum = 0;
-    std::vector<std::size_t> stack{0};
-    while (!stack.empty()) {
-      const Node& n = nodes_[stack.back()];
-      stack.pop_back();
-      const double d[3] = {n.center[0] - q[0], n.center[1] - q[1], n.center[2] - q[2]};
-      const double r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-      if (r2 > beta * beta * n.radius * n.radius) {
-        sum += (n.normal[0] * d[0] + n.normal[1] * d[1] + n.normal[2] * d[2]) / (r2 * std::sqrt(r2));
-      } else if (n.left < 0) {
-        for (std::size_t i = n.first; i < n.last; ++i) sum += solid_angle(order_[i], q);
-      } else {
-        stack.push_back(std::size_t(n.left));
-        stack.push_back(std::size_t(n.left) + 1);
-      }
-    }
-    return sum / (4 * M_PI);
-  }
-
-  struct Node {
-    Point3d center{}, normal{};  // area-weighted centroid; sum of area vectors
-    double radius = 0;
-    std::ptrdiff_t left = -1;    // children left, left + 1
-    std::size_t first = 0, last = 0;
-  };
-
-  const Point3d& P(std::size_t t, int k) const { return f_.points[f_.tris[t][k]]; }
-
-  double solid_angle(std::size_t t, const Point3d& q) const {
-    double a[3], b[3], c[3];
-    for (int i = 0; i < 3; ++i) {
-      a[i] = P(t, 0)[i] - q[i];
-      b[i] = P(t, 1)[i] - q[i];
-      c[i] = P(t, 2)[i] - q[i];
-    }
-    const double la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-    const double lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
-    const double lc = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-    const double det = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-                       a[2] * (b[0] * c[1] - b[1] * c[0]);
-    const double ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    const double bc = b[0] * c[0] + b[1] * c[1] + b[2] * c[2];
-    const double ca = c[0] * a[0] + c[1] * a[1] + c[2] * a[2];
-    return 2 * std::atan2(det, la * lb * lc + ab * lc + bc * la + ca * lb);
-  }
-
-  /// Fills node `slot` with the triangles order_[first, last); children are
-  /// allocated as an adjacent pair.
-  void build(std::size_t slot, std::size_t first, std::size_t last) {
-    Node n;
-    n.first = first;
-    n.last = last;
-    double area = 0;
-    Point3d lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-    for (std::size_t i = first; i < last; ++i) {
-      const std::size_t t = order_[i];
-      const Point3d m = normal(P(t, 0), P(t, 1), P(t, 2));
-      const double A = 0.5 * std::sqrt(dot(m, m));
-      for (int a = 0; a < 3; ++a) n.normal[a] += 0.5 * m[a];
-      area += A;
-      for (int a = 0; a < 3; ++a) {
-        n.center[a] += A * centroid_[t][a];
-        lo[a] = std::min(lo[a], centroid_[t][a]);
-        hi[a] = std::max(hi[a], centroid_[t][a]);
-      }
-    }
-    for (int a = 0; a < 3; ++a) n.center[a] = area > 0 ? n.center[a] / area : (lo[a] + hi[a]) / 2;
-    for (std::size_t i = first; i < last; ++i)
-      for (int k = 0; k < 3; ++k) n.radius = std::max(n.radius, dist(n.center, P(order_[i], k)));
-    if (last - first > kLeaf) {
-      int axis = 0;
-      for (int a = 1; a < 3; ++a)
-        if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
-      const std::size_t mid = (first + last) / 2;
-      std::nth_element(order_.begin() + first, order_.begin() + mid, order_.begin() + last,
-                       [&](std::size_t x, std::size_t y) { return centroid_[x][axis] < centroid_[y][axis]; });
-      n.left = std::ptrdiff_t(nodes_.size());
-      nodes_.resize(nodes_.size() + 2);
-      build(std::size_t(n.left), first, mid);
-      build(std::size_t(n.left) + 1, mid, last);
-    }
-    nodes_[slot] = n;
-  }
-
-  const Facets& f_;
-  std::vector<std::size_t> order_;
-  std::vector<Point3d> centroid_;
-  std::vector<Node> nodes_;
-};
 
 // ---------------------------------------------------------------------------
 // The overlay grid: cubes (i, j, k) of side h at origin + (i, j, k) * h, and
@@ -2441,7 +2314,7 @@ std::size_t group_faces(const Facets& f, const Soup& input, const std::vector<Ou
 class ExtractedSurface {
  public:
   ExtractedSurface(const std::vector<OutVertex>& vertices, const std::vector<Tri>& tris)
-      : facets_{positions(vertices), tris, {}, {}}, distance_(triangles(vertices, tris)), winding_(facets_) {}
+      : facets_{positions(vertices), tris, {}, {}}, distance_(triangles(vertices, tris)), winding_(facets_.points, facets_.tris) {}
 
   /// Is p farther than h from the surface? `hint` as for
   /// SurfaceDistance::any_within.
@@ -2642,7 +2515,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   // it bounds. A component mostly facing into a region of negative winding
   // number (inside out, or a cavity of an inside-out part: the rule of
   // inspect/nesting.h, on a soup) is turned and the field made again.
-  std::optional<WindingNumber> field(std::in_place, f);
+  std::optional<WindingNumber> field(std::in_place, f.points, f.tris);
   std::vector<std::array<double, 2>> sides(f.tris.size());
   const auto measure_sides = [&] {
     tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
@@ -2654,7 +2527,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   measure_sides();
   std::vector<char> turned_before(f.tris.size(), 0);
   for (int round = 0; round < 4 && turn_inside_out(f, sides, turned_before, r); ++round) {
-    field.emplace(f);
+    field.emplace(f.points, f.tris);
     measure_sides();
   }
   const WindingNumber& winding = *field;
@@ -3124,7 +2997,7 @@ namespace {
 class InsideVolume {
  public:
   InsideVolume(const Facets& f, const detail::SurfaceDistance& surface, bool certified)
-      : f_(f), surface_(surface), winding_(f), certified_(certified && !f.tris.empty()) {}
+      : f_(f), surface_(surface), winding_(f.points, f.tris), certified_(certified && !f.tris.empty()) {}
 
   bool operator()(const Point3d& p) const {
     if (certified_) std::call_once(indexed_, [this] { index(); });  // on first use: often none is asked

@@ -35,6 +35,7 @@
 #include "polyheal/repair/deintersect.h"
 #include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/detail/exact_meet.h"
+#include "polyheal/repair/detail/winding.h"
 
 namespace polyheal {
 namespace {
@@ -1407,8 +1408,55 @@ void split_pinches(const Soup& input, bool input_manifold, RegularizeResult& res
 /// flaps: a wall meets solids along its whole rim). Empty when `s` balances
 /// already. Throws UnsupportedInput, naming an edge, when what is left still
 /// does not balance.
+///
+/// A wall lies inside what is kept (winding number 1 around it), a doubled
+/// face on it (1/2). A sheet that lies outside the rest is not one: a solid
+/// nested in another and sharing faces with it (a part set flush into a
+/// block, welded) balances its shared rim either without the part's exposed
+/// faces or without the block's faces around them, and only the first
+/// leaves the union; the second left the part alone, the block cut away.
+/// Such a sheet is kept: the rest's mean winding number over it (at up to
+/// 8 of its faces, each its area at its centroid, the two sides averaged so
+/// that a kept face through the point counts 1/2) is below 1/4. A
+/// measurement (detail/winding.h); the union that follows is exact.
 std::vector<std::size_t> walls_to_leave_out(const Soup& s) {
-  SheetsLeftOut walls = sheets_to_leave_out(s, false);
+  std::vector<std::array<Index, 3>> tris;
+  std::vector<std::size_t> first_tri(s.face_count() + 1, 0);
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    const FaceView v = s.face(f);
+    for (std::size_t k = 1; k + 1 < v.size(); ++k) tris.push_back({v[0], v[k], v[k + 1]});
+    first_tri[f + 1] = tris.size();
+  }
+  std::optional<detail::WindingNumber> field;
+  auto lies_inside_rest = [&](const std::vector<std::size_t>& sheet) {
+    if (!field) field.emplace(s.points, tris);
+    constexpr std::size_t kSamples = 8;
+    const std::size_t samples = std::min(kSamples, sheet.size());
+    double sum = 0, area = 0;
+    for (std::size_t i = 0; i < samples; ++i) {
+      const std::size_t f = sheet[i * sheet.size() / samples];
+      if (first_tri[f] == first_tri[f + 1]) continue;
+      const std::array<Index, 3>& t = tris[first_tri[f]];
+      const Point3d &a = s.points[t[0]], &b = s.points[t[1]], &c = s.points[t[2]];
+      const Point3d n = normal(a, b, c);
+      const double len = norm(n);
+      if (!(len > 0)) continue;
+      const Point3d g = mul(add(add(a, b), c), 1.0 / 3);
+      const double off = 1e-6 * std::max({norm(sub(b, a)), norm(sub(c, b)), norm(sub(a, c))});
+      double w = 0;
+      for (double side : {off, -off}) {
+        const Point3d q = add(g, mul(n, side / len));
+        double rest = (*field)(q);
+        for (std::size_t u : sheet)
+          for (std::size_t r = first_tri[u]; r < first_tri[u + 1]; ++r) rest -= field->share(r, q);
+        w += rest / 2;
+      }
+      sum += w * 0.5 * len;
+      area += 0.5 * len;
+    }
+    return area == 0 || sum / area >= 0.25;
+  };
+  SheetsLeftOut walls = sheets_to_leave_out(s, false, lies_inside_rest);
   if (walls.imbalance > 0)
     throw UnsupportedInput("edge (" + std::to_string(walls.unbalanced_a) + ", " + std::to_string(walls.unbalanced_b) +
                            ") is used " + std::to_string(walls.unbalanced_by) +

@@ -1,0 +1,119 @@
+#include "polyheal/repair/detail/winding.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "polyheal/mesh/vec3.h"
+
+namespace polyheal::detail {
+namespace {
+
+constexpr double kBeta = 2.5, kBetaStrict = 8;
+constexpr std::size_t kLeaf = 8;
+
+double dist(const Point3d& a, const Point3d& b) { return norm(sub(a, b)); }
+
+}  // namespace
+
+WindingNumber::WindingNumber(const std::vector<Point3d>& points, const std::vector<std::array<Index, 3>>& tris)
+    : points_(points), tris_(tris) {
+  order_.resize(tris.size());
+  std::iota(order_.begin(), order_.end(), 0);
+  centroid_.resize(tris.size());
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (int a = 0; a < 3; ++a) centroid_[t][a] = (P(t, 0)[a] + P(t, 1)[a] + P(t, 2)[a]) / 3;
+  if (order_.empty()) return;
+  nodes_.resize(1);
+  build(0, 0, order_.size());
+}
+
+double WindingNumber::operator()(const Point3d& q) const {
+  const double w = evaluate(q, kBeta);
+  return std::abs(w - 0.5) < 0.05 ? evaluate(q, kBetaStrict) : w;
+}
+
+double WindingNumber::on_face(const Point3d& q, std::size_t t) const {
+  return evaluate(q, kBeta) - solid_angle(t, q) / (4 * M_PI);
+}
+
+double WindingNumber::share(std::size_t t, const Point3d& q) const { return solid_angle(t, q) / (4 * M_PI); }
+
+double WindingNumber::evaluate(const Point3d& q, double beta) const {
+  if (nodes_.empty()) return 0;
+  double sum = 0;
+  std::vector<std::size_t> stack{0};
+  while (!stack.empty()) {
+    const Node& n = nodes_[stack.back()];
+    stack.pop_back();
+    const double d[3] = {n.center[0] - q[0], n.center[1] - q[1], n.center[2] - q[2]};
+    const double r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    if (r2 > beta * beta * n.radius * n.radius) {
+      sum += (n.normal[0] * d[0] + n.normal[1] * d[1] + n.normal[2] * d[2]) / (r2 * std::sqrt(r2));
+    } else if (n.left < 0) {
+      for (std::size_t i = n.first; i < n.last; ++i) sum += solid_angle(order_[i], q);
+    } else {
+      stack.push_back(std::size_t(n.left));
+      stack.push_back(std::size_t(n.left) + 1);
+    }
+  }
+  return sum / (4 * M_PI);
+}
+
+double WindingNumber::solid_angle(std::size_t t, const Point3d& q) const {
+  double a[3], b[3], c[3];
+  for (int i = 0; i < 3; ++i) {
+    a[i] = P(t, 0)[i] - q[i];
+    b[i] = P(t, 1)[i] - q[i];
+    c[i] = P(t, 2)[i] - q[i];
+  }
+  const double la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+  const double lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+  const double lc = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+  const double det = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+                     a[2] * (b[0] * c[1] - b[1] * c[0]);
+  const double ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  const double bc = b[0] * c[0] + b[1] * c[1] + b[2] * c[2];
+  const double ca = c[0] * a[0] + c[1] * a[1] + c[2] * a[2];
+  return 2 * std::atan2(det, la * lb * lc + ab * lc + bc * la + ca * lb);
+}
+
+/// Fills node `slot` with the triangles order_[first, last); children are
+/// allocated as an adjacent pair.
+void WindingNumber::build(std::size_t slot, std::size_t first, std::size_t last) {
+  Node n;
+  n.first = first;
+  n.last = last;
+  double area = 0;
+  Point3d lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (std::size_t i = first; i < last; ++i) {
+    const std::size_t t = order_[i];
+    const Point3d m = normal(P(t, 0), P(t, 1), P(t, 2));
+    const double A = 0.5 * std::sqrt(dot(m, m));
+    for (int a = 0; a < 3; ++a) n.normal[a] += 0.5 * m[a];
+    area += A;
+    for (int a = 0; a < 3; ++a) {
+      n.center[a] += A * centroid_[t][a];
+      lo[a] = std::min(lo[a], centroid_[t][a]);
+      hi[a] = std::max(hi[a], centroid_[t][a]);
+    }
+  }
+  for (int a = 0; a < 3; ++a) n.center[a] = area > 0 ? n.center[a] / area : (lo[a] + hi[a]) / 2;
+  for (std::size_t i = first; i < last; ++i)
+    for (int k = 0; k < 3; ++k) n.radius = std::max(n.radius, dist(n.center, P(order_[i], k)));
+  if (last - first > kLeaf) {
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+      if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
+    const std::size_t mid = (first + last) / 2;
+    std::nth_element(order_.begin() + first, order_.begin() + mid, order_.begin() + last,
+                     [&](std::size_t x, std::size_t y) { return centroid_[x][axis] < centroid_[y][axis]; });
+    n.left = std::ptrdiff_t(nodes_.size());
+    nodes_.resize(nodes_.size() + 2);
+    build(std::size_t(n.left), first, mid);
+    build(std::size_t(n.left) + 1, mid, last);
+  }
+  nodes_[slot] = n;
+}
+
+}  // namespace polyheal::detail
