@@ -8,6 +8,7 @@
 
 #include "polyheal/inspect/nesting.h"
 #include "polyheal/inspect/report.h"
+#include "polyheal/io/read.h"
 #include "polyheal/io/write.h"
 #include "support/builders.h"
 
@@ -485,6 +486,16 @@ TEST_CASE("nesting: inside-out components are those with negative volume inside 
     // the cavity turned out by its depth rule: a box inside out around it
     const Nesting both = nesting(reversed(through), true);
     CHECK(turned_by_part(both, {0, 12}) == std::vector<int>{1, 1});
+  }
+  SECTION("crossing components: how deep the shallowest crossing goes") {
+    const Soup deep = test::concat(test::box({0, 0, 0}, {2, 2, 2}), test::box({1, 1, 1}, {3, 3, 3}));
+    CHECK(least_interpenetration(deep, inspect(deep).self_intersections) == Approx(1.0));  // corner (2, 2, 2) in the other
+    // a third box grazing the first: the shallowest pair decides
+    const Soup graze = test::concat(deep, test::box({-0.9, 0.5, 0.5}, {0.1, 1.5, 1.5}));
+    CHECK(least_interpenetration(graze, inspect(graze).self_intersections) == Approx(0.1));
+    // a component crossing itself: not a question of parts
+    const Soup knot = read_soup(test::fixture("knot_tube_r1.2.off"));
+    CHECK(least_interpenetration(knot, inspect(knot).self_intersections) == 0);
   }
   SECTION("an outward part inside a solid is left as it is (embedded, not a cavity gone wrong)") {
     const Soup s = test::concat(outer, inner);

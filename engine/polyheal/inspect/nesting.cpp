@@ -1,6 +1,9 @@
 #include "polyheal/inspect/nesting.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/AABB_face_graph_triangle_primitive.h>
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
 
@@ -9,6 +12,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <set>
 #include <unordered_map>
 
 #include "polyheal/inspect/predicates.h"
@@ -40,53 +44,63 @@ struct Box {
   }
 };
 
-/// One component as a Surface_mesh with its point-in-volume test, built on
-/// first use.
-struct Solid {
-  Mesh mesh;
-  std::unique_ptr<Side> side;
-};
-
-}  // namespace
-
-Nesting nesting(const Soup& soup, bool crossing) {
-  Nesting n;
-  const Soup welded = apply_weld(soup, weld_identical_points(soup.points));
-  const Topology t = analyze_topology(welded);
-  n.components = t.components;
-  n.face_component = t.face_component;
-  std::vector<std::vector<std::size_t>> faces(n.components);
-  for (std::size_t f = 0; f < welded.face_count(); ++f) faces[t.face_component[f]].push_back(f);
-  std::vector<Box> box(n.components);
-  std::vector<Index> some_vertex(n.components, 0);
-  n.volume_sign.assign(n.components, 0);
-  for (std::size_t c = 0; c < n.components; ++c) {
-    n.volume_sign[c] = enclosed_volume_sign(welded, faces[c]);
-    for (std::size_t f : faces[c])
-      for (Index i : welded.face(f))
-        for (int k = 0; k < 3; ++k) {
-          box[c].lo[k] = std::min(box[c].lo[k], welded.points[i][k]);
-          box[c].hi[k] = std::max(box[c].hi[k], welded.points[i][k]);
-        }
-    some_vertex[c] = welded.face(faces[c].front())[0];
+/// The components of a welded soup (faces joined through shared edges),
+/// their boxes, and each one's Surface_mesh with its point-in-volume test
+/// and distance index, built on first use.
+class Components {
+ public:
+  explicit Components(const Soup& soup)
+      : welded_(apply_weld(soup, weld_identical_points(soup.points))), topology_(analyze_topology(welded_)) {
+    faces_.resize(count());
+    for (std::size_t f = 0; f < welded_.face_count(); ++f) faces_[topology_.face_component[f]].push_back(f);
+    box_.resize(count());
+    for (std::size_t c = 0; c < count(); ++c)
+      for (std::size_t f : faces_[c])
+        for (Index i : welded_.face(f))
+          for (int k = 0; k < 3; ++k) {
+            box_[c].lo[k] = std::min(box_[c].lo[k], welded_.points[i][k]);
+            box_[c].hi[k] = std::max(box_[c].hi[k], welded_.points[i][k]);
+          }
+    solids_.resize(count());
   }
-  n.inside_out.assign(n.components, 0);
-  n.turned.assign(n.components, 0);
-  const bool any_inward = std::any_of(n.volume_sign.begin(), n.volume_sign.end(), [](int s) { return s < 0; });
-  if (!any_inward) return n;
+  std::size_t count() const { return topology_.components; }
+  const Soup& welded() const { return welded_; }
+  const Topology& topology() const { return topology_; }
+  const std::vector<std::size_t>& faces(std::size_t c) const { return faces_[c]; }
+  const Box& box(std::size_t c) const { return box_[c]; }
+  /// Whether p lies strictly inside component d (exact on p's doubles).
+  bool inside(std::size_t d, const Point3d& p) {
+    return solid(d).side->operator()(K::Point_3(p[0], p[1], p[2])) == CGAL::ON_BOUNDED_SIDE;
+  }
+  /// The squared distance from p to component d's surface (doubles; a measurement).
+  double squared_distance(std::size_t d, const Point3d& p) {
+    Solid& s = solid(d);
+    if (!s.tree) {
+      s.tree = std::make_unique<Tree>(s.mesh.faces().begin(), s.mesh.faces().end(), s.mesh);
+      s.tree->accelerate_distance_queries();
+    }
+    return s.tree->squared_distance(K::Point_3(p[0], p[1], p[2]));
+  }
 
-  std::vector<Solid> solids(n.components);
-  auto solid = [&](std::size_t d) -> const Side& {
-    Solid& s = solids[d];
+ private:
+  using Primitive = CGAL::AABB_face_graph_triangle_primitive<Mesh>;
+  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+  struct Solid {
+    Mesh mesh;
+    std::unique_ptr<Side> side;
+    std::unique_ptr<Tree> tree;
+  };
+  Solid& solid(std::size_t d) {
+    Solid& s = solids_[d];
     if (!s.side) {
       std::unordered_map<Index, Mesh::Vertex_index> local;
-      for (std::size_t f : faces[d]) {
+      for (std::size_t f : faces_[d]) {
         std::array<Mesh::Vertex_index, 3> v;
-        const FaceView fv = welded.face(f);
+        const FaceView fv = welded_.face(f);
         for (int k = 0; k < 3; ++k) {
           auto [it, fresh] = local.try_emplace(fv[k]);
           if (fresh) {
-            const Point3d& p = welded.points[fv[k]];
+            const Point3d& p = welded_.points[fv[k]];
             it->second = s.mesh.add_vertex(K::Point_3(p[0], p[1], p[2]));
           }
           v[k] = it->second;
@@ -95,15 +109,41 @@ Nesting nesting(const Soup& soup, bool crossing) {
       }
       s.side = std::make_unique<Side>(s.mesh);
     }
-    return *s.side;
-  };
+    return s;
+  }
+
+  Soup welded_;
+  Topology topology_;
+  std::vector<std::vector<std::size_t>> faces_;
+  std::vector<Box> box_;
+  std::vector<Solid> solids_;
+};
+
+}  // namespace
+
+Nesting nesting(const Soup& soup, bool crossing) {
+  Nesting n;
+  Components parts(soup);
+  const Soup& welded = parts.welded();
+  n.components = parts.count();
+  n.face_component = parts.topology().face_component;
+  std::vector<Index> some_vertex(n.components, 0);
+  n.volume_sign.assign(n.components, 0);
+  for (std::size_t c = 0; c < n.components; ++c) {
+    n.volume_sign[c] = enclosed_volume_sign(welded, parts.faces(c));
+    some_vertex[c] = welded.face(parts.faces(c).front())[0];
+  }
+  n.inside_out.assign(n.components, 0);
+  n.turned.assign(n.components, 0);
+  const bool any_inward = std::any_of(n.volume_sign.begin(), n.volume_sign.end(), [](int s) { return s < 0; });
+  if (!any_inward) return n;
+
   // c inside d. Disjoint closed surfaces: one vertex of c decides (it is
   // never on d's boundary; were it, c would touch d and not be certified).
   // Crossing ones: the greater part of c's area, sampled (below).
   auto one_vertex_inside = [&](std::size_t c, std::size_t d) {
-    if (c == d || !box[c].within(box[d])) return false;
-    const Point3d& p = welded.points[some_vertex[c]];
-    return solid(d)(K::Point_3(p[0], p[1], p[2])) == CGAL::ON_BOUNDED_SIDE;
+    if (c == d || !parts.box(c).within(parts.box(d))) return false;
+    return parts.inside(d, welded.points[some_vertex[c]]);
   };
   // The share of c's area (kSamples faces spread over its list, each
   // standing for its area at its centroid; every face when fewer) strictly
@@ -113,9 +153,9 @@ Nesting nesting(const Soup& soup, bool crossing) {
   auto area_share_inside = [&](std::size_t c, const std::function<bool(std::size_t)>& in_one_of) {
     std::vector<std::size_t> others;
     for (std::size_t d = 0; d < n.components; ++d)
-      if (d != c && box[c].meets(box[d]) && in_one_of(d)) others.push_back(d);
+      if (d != c && parts.box(c).meets(parts.box(d)) && in_one_of(d)) others.push_back(d);
     if (others.empty()) return 0.0;
-    const std::vector<std::size_t>& fc = faces[c];
+    const std::vector<std::size_t>& fc = parts.faces(c);
     const std::size_t samples = std::min(kSamples, fc.size());
     double inside_area = 0, all_area = 0;
     for (std::size_t k = 0; k < samples; ++k) {
@@ -123,10 +163,9 @@ Nesting nesting(const Soup& soup, bool crossing) {
       const Point3d &a = welded.points[v[0]], &b = welded.points[v[1]], &e = welded.points[v[2]];
       const double area = norm(normal(a, b, e));
       const Point3d m = mul(add(add(a, b), e), 1.0 / 3);
-      const K::Point_3 centroid(m[0], m[1], m[2]);
       all_area += area;
       for (std::size_t d : others)
-        if (solid(d)(centroid) == CGAL::ON_BOUNDED_SIDE) {
+        if (parts.inside(d, m)) {
           inside_area += area;
           break;
         }
@@ -168,6 +207,44 @@ Nesting nesting(const Soup& soup, bool crossing) {
     n.turned[c] = (n.volume_sign[c] > 0) != (depth % 2 == 0);
   }
   return n;
+}
+
+double least_interpenetration(const Soup& soup, const std::vector<FacePair>& pairs) {
+  if (pairs.empty()) return 0;
+  Components parts(soup);
+  const std::vector<std::size_t>& component = parts.topology().face_component;
+  std::set<std::pair<std::size_t, std::size_t>> crossing;
+  for (const FacePair& p : pairs) {
+    const std::size_t c = component[p.first], d = component[p.second];
+    if (c == d) return 0;  // a part crossing itself: local moves' work
+    crossing.emplace(std::min(c, d), std::max(c, d));
+  }
+  // How deep a vertex of c (those in d's box, up to kSamples spread over
+  // them) lies inside d.
+  constexpr std::size_t kSamples = 256;
+  const Soup& welded = parts.welded();
+  auto depth_in = [&](std::size_t c, std::size_t d) {
+    std::vector<Index> in_box;
+    for (std::size_t f : parts.faces(c))
+      for (Index i : welded.face(f)) {
+        const Point3d& p = welded.points[i];
+        bool within = true;
+        for (int k = 0; k < 3; ++k) within = within && p[k] > parts.box(d).lo[k] && p[k] < parts.box(d).hi[k];
+        if (within) in_box.push_back(i);
+      }
+    std::sort(in_box.begin(), in_box.end());
+    in_box.erase(std::unique(in_box.begin(), in_box.end()), in_box.end());
+    const std::size_t samples = std::min(kSamples, in_box.size());
+    double deepest = 0;
+    for (std::size_t k = 0; k < samples; ++k) {
+      const Point3d& p = welded.points[in_box[k * in_box.size() / samples]];
+      if (parts.inside(d, p)) deepest = std::max(deepest, std::sqrt(parts.squared_distance(d, p)));
+    }
+    return deepest;
+  };
+  double least = std::numeric_limits<double>::infinity();
+  for (const auto& [c, d] : crossing) least = std::min(least, std::max(depth_in(c, d), depth_in(d, c)));
+  return least;
 }
 
 namespace {

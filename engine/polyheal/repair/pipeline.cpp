@@ -570,6 +570,23 @@ class Pipeline {
 
   const StageReport& deintersect() {
     return stage("deintersect", [&](StageReport& s) {
+      // Parts of an assembly that interpenetrate (a vertex of each crossing
+      // pair of components deeper inside the other than --max-deviation):
+      // no move within the limit separates them, and on such inputs the
+      // moves took most of the run (three overlapping rocker arms, 53k
+      // faces: 6.5 of 8.4 s) for a union no closer than the union of the
+      // surface as given. Refused; the union follows.
+      const Report& cr = cur_.report;
+      if (cr.closed && cr.oriented && cr.nonmanifold_edges.empty()) {
+        const double depth = least_interpenetration(cur_.soup, cr.self_intersections);
+        if (depth > deviation_limit()) {
+          std::ostringstream why;
+          why << "the parts that cross interpenetrate (each crossing pair of components has a vertex " << depth
+              << " or more inside the other, beyond --max-deviation " << deviation_limit()
+              << "): no local move within the limit separates them; their union follows";
+          throw UnsupportedInput(why.str());
+        }
+      }
       DeintersectOptions d;
       d.certify = false;
       d.observer = o_.observer;
