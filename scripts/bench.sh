@@ -340,6 +340,18 @@ if want repair; then
     rp_inputs+=("$root/fixtures/$f")
   done
   while IFS= read -r f; do rp_inputs+=("$corpus/$f"); done < <(awk -F'\t' 'NR > 1 {print $1}' "$corpus/MANIFEST.tsv")
+  # Multi-body models as a slicer or a robot description gets them (binary
+  # STL, float coordinates): parts overlapping deeply, one inside out, an
+  # open part through a closed one, a part given twice 1e-5 apart.
+  assembly() {  # assembly NAME PART...
+    "$b/polyheal_gen" assembly "$work/$1" "${@:2}" >/dev/null 2>&1 && rp_inputs+=("$work/$1")
+  }
+  assembly asm_rocker_arms.stl "$corpus/vhacd__rocker-arm.off@0,0,0,1" "$corpus/vhacd__rocker-arm.off@0.1,0.05,0.2,1" \
+    "$corpus/cgal__fandisk.off@0,0,-0.3,0.5"
+  assembly asm_inverted_pinion.stl "$corpus/cgal__couplingdown.off@0,0,0,1" "$corpus/cgal__pinion.off@0.3,0.1,0,0.4,flip" \
+    "$corpus/cgal__joint.off@-0.3,0,0.1,0.5"
+  assembly asm_open_elephant.stl "$corpus/cgal__elephant-with-holes.off@0,0,0,1" "$corpus/cgal__fandisk.off@0.2,0.1,0,0.5"
+  assembly asm_fandisk_twice.stl "$corpus/cgal__fandisk.off@0,0,0,1" "$corpus/cgal__fandisk.off@0.00001,0.000007,0,1"
   for f in "${rp_inputs[@]}"; do
     [ -f "$f" ] || continue
     name=$(basename "$f")
@@ -590,7 +602,11 @@ TAIL
   cat <<'TAIL'
 
 Every corpus mesh (../shared/corpus, all categories: self-intersecting, CAD
-tessellations, dirty soups, clean) and the generated fixtures, repaired with the
+tessellations, dirty soups, clean), the generated fixtures, and four multi-body
+models as a slicer or robot description gets them (`asm_*`: corpus parts placed
+into one binary STL by `polyheal_gen assembly`, see bench.sh: three parts
+overlapping deeply; one part inside out across two others; an open part with a
+closed one through it; a part given twice 1e-5 apart), repaired with the
 defaults. Peer (`scripts/gen/cgal_repair_peer.cpp`): what a CGAL user assembles from
 PMP — `repair_polygon_soup`, `orient_polygon_soup`, `polygon_soup_to_polygon_mesh`,
 `triangulate_faces`, `stitch_borders`, `triangulate_hole` on every border, then

@@ -8,6 +8,8 @@
 //   polyheal_gen torus OUT                    closed torus R=3, r=1
 //   polyheal_gen offset --distance D IN OUT   raw offset along area-weighted vertex normals
 //   polyheal_gen dirty-box OUT                box of separate patches: gap, overlap, T-junctions, hole
+//   polyheal_gen assembly OUT PART...         parts placed into one file (a slicer's or robot's multi-body
+//                                             model): PART = FILE@DX,DY,DZ,SCALE[,flip] (flip: inside out)
 //   polyheal_gen distance A B                 one-sided distances A->B and B->A (the reports' measure), and
 //                                             A->B over the part of A outside B's volume
 //
@@ -17,6 +19,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -293,6 +296,32 @@ Soup narrow_clearance(std::size_t faces, int tubes) {
   return s;
 }
 
+/// One part of `assembly`: FILE@DX,DY,DZ,SCALE[,flip] — its points scaled
+/// about the origin, then moved; `flip` turns its faces inside out.
+void add_part(Soup& s, const std::string& spec) {
+  const std::size_t at = spec.rfind('@');
+  if (at == std::string::npos) throw std::runtime_error("part '" + spec + "': expected FILE@DX,DY,DZ,SCALE[,flip]");
+  const Soup part = read_soup(spec.substr(0, at));
+  double t[4] = {0, 0, 0, 1};
+  bool flip = false;
+  std::size_t from = at + 1;
+  for (int k = 0; from <= spec.size(); ++k) {
+    const std::size_t comma = std::min(spec.find(',', from), spec.size());
+    const std::string field = spec.substr(from, comma - from);
+    if (k < 4) t[k] = std::atof(field.c_str());
+    else if (field == "flip") flip = true;
+    else throw std::runtime_error("part '" + spec + "': unknown field '" + field + "'");
+    from = comma + 1;
+  }
+  const Index base = Index(s.points.size());
+  for (const Point3d& p : part.points) s.points.push_back({p[0] * t[3] + t[0], p[1] * t[3] + t[1], p[2] * t[3] + t[2]});
+  for (std::size_t f = 0; f < part.face_count(); ++f) {
+    const FaceView v = part.face(f);
+    for (std::size_t k = 1; k + 1 < v.size(); ++k)
+      flip ? s.add_triangle(base + v[0], base + v[k + 1], base + v[k]) : s.add_triangle(base + v[0], base + v[k], base + v[k + 1]);
+  }
+}
+
 [[noreturn]] void usage() {
   std::fprintf(stderr,
                "usage: polyheal_gen tube [--edge E] [--outer R] [--inner R] [--length L] OUT\n"
@@ -301,6 +330,7 @@ Soup narrow_clearance(std::size_t faces, int tubes) {
                "       polyheal_gen torus OUT\n"
                "       polyheal_gen offset --distance D IN OUT\n"
                "       polyheal_gen dirty-box OUT\n"
+               "       polyheal_gen assembly OUT FILE@DX,DY,DZ,SCALE[,flip]...\n"
                "       polyheal_gen narrow-clearance [--faces N] [--tubes K] OUT\n"
                "       polyheal_gen distance A B   (prints: A->B B->A diagonal-of-A A->B-outside-B, bounded error 1e-4 diagonal)\n");
   std::exit(2);
@@ -343,7 +373,10 @@ int main(int argc, char** argv) {
       return 0;
     }
     Soup s;
-    if (cmd == "tube" && pos.size() == 1) s = tube(opt("--outer", 5.0), opt("--inner", 4.8), opt("--length", 12.0), opt("--edge", 3.0));
+    if (cmd == "assembly" && pos.size() >= 2) {
+      for (std::size_t k = 1; k < pos.size(); ++k) add_part(s, pos[k]);
+      pos = {pos.front()};
+    } else if (cmd == "tube" && pos.size() == 1) s = tube(opt("--outer", 5.0), opt("--inner", 4.8), opt("--length", 12.0), opt("--edge", 3.0));
     else if (cmd == "cylinder" && pos.size() == 1) s = cylinder(int(opt("--segments", 96)), opt("--radius", 10), opt("--height", 40));
     else if (cmd == "torus-knot" && pos.size() == 1) s = torus_knot(std::size_t(opt("--faces", 100000)), opt("--radius", 0.2));
     else if (cmd == "cone" && pos.size() == 1) s = cone(int(opt("--segments", 100)), opt("--radius", 10), opt("--height", 10));

@@ -327,7 +327,10 @@ class Pipeline {
   void orient_outward(bool crossing = false) {
     if (!o_.orient_outward) return;
     const Report& cr = cur_.report;
-    if (crossing ? !cr.closed || !cr.oriented || !cr.nonmanifold_edges.empty() || cr.self_intersections.empty()
+    // (crossing: one component is the union's own business — regularize
+    // turns a surface inside out as a whole.)
+    if (crossing ? cr.components < 2 || !cr.closed || !cr.oriented || !cr.nonmanifold_edges.empty() ||
+                       cr.self_intersections.empty()
                  : !cr.certified_clean() || cr.inside_out_components == 0)
       return;
     const auto t0 = std::chrono::steady_clock::now();
@@ -577,7 +580,7 @@ class Pipeline {
       // faces: 6.5 of 8.4 s) for a union no closer than the union of the
       // surface as given. Refused; the union follows.
       const Report& cr = cur_.report;
-      if (cr.closed && cr.oriented && cr.nonmanifold_edges.empty()) {
+      if (cr.components > 1 && cr.closed && cr.oriented && cr.nonmanifold_edges.empty()) {
         const double depth = least_interpenetration(cur_.soup, cr.self_intersections);
         if (depth > deviation_limit()) {
           std::ostringstream why;
