@@ -175,6 +175,12 @@ printf 'OFF\n8 12 0\n1 0.5 0.25\n3 0.5 0.25\n3 2.5 0.25\n1 2.5 0.25\n1 0.5 2.25\
 expect 0 "union of two overlapping cubes" -- "$bin" union "$tmp/cube.off" "$tmp/cube_b.off" -o "$tmp/union.off"
 grep_out "volume 13.375, 1 components" "$tmp/out" "union encloses 8 + 8 - 2.625"
 expect 0 "union output checks clean" -- "$bin" check "$tmp/union.off"
+awk '$1 == 3 && NF == 4 {print 3, $2, $4, $3; next} {print}' "$tmp/cube_b.off" > "$tmp/cube_b_inside_out.off"
+expect 0 "union of a cube and an inside-out cube" -- "$bin" union "$tmp/cube.off" "$tmp/cube_b_inside_out.off" -o "$tmp/union_io.off"
+grep_out "volume 13.375, 1 components" "$tmp/out" "the inside-out input is turned: still the union"
+grep_out "cube_b_inside_out.off encloses negative volume (inside out): turned outwards" "$tmp/err" "union notes the input it turned"
+expect 0 "union --keep-orientation takes it as given" -- "$bin" union --keep-orientation "$tmp/cube.off" "$tmp/cube_b_inside_out.off" -o "$tmp/union_keep.off"
+grep_out "volume 5.375, 1 components" "$tmp/out" "as given, the inside-out cube subtracts: 8 - 2.625"
 expect 2 "union needs two inputs" -- "$bin" union "$tmp/cube.off" -o "$tmp/u2.off"
 expect 2 "union never writes over an input" -- "$bin" union "$tmp/cube.off" "$tmp/cube_b.off" -o "$tmp/cube_b.off" --overwrite
 # polyheal rebuild
