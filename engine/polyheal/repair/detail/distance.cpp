@@ -246,7 +246,12 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
       // all its corners, but the region is. (Asked only of pieces longer
       // than the distance sought: smaller ones are done by a few bisections,
       // cheaper than a search of the region within that distance.)
+      // (Not when a corner is beyond that distance itself — a corner `skip`
+      // rules out, inside a volume: no bound on the piece is below it. Along
+      // a crossing of `to`, every mixed piece is such, and the search was most
+      // of the measure.)
       if (edge[k] > bound + error_bound &&
+          *std::max_element(piece.d.begin(), piece.d.end()) <= (bound + error_bound) * (1 + 1e-6) &&
           to.cover_bound(piece.p, piece.best, bound + error_bound) <= bound + error_bound)
         continue;
       const int i = (k + 1) % 3, j = (k + 2) % 3;  // the longest edge runs from corner i to corner j
