@@ -487,15 +487,21 @@ TEST_CASE("nesting: inside-out components are those with negative volume inside 
     const Nesting both = nesting(reversed(through), true);
     CHECK(turned_by_part(both, {0, 12}) == std::vector<int>{1, 1});
   }
-  SECTION("crossing components: how deep the shallowest crossing goes") {
+  SECTION("crossing components: how deep each crossing pair reaches, and the smaller part's size") {
     const Soup deep = test::concat(test::box({0, 0, 0}, {2, 2, 2}), test::box({1, 1, 1}, {3, 3, 3}));
-    CHECK(least_interpenetration(deep, inspect(deep).self_intersections) == Approx(1.0));  // corner (2, 2, 2) in the other
-    // a third box grazing the first: the shallowest pair decides
+    std::vector<Interpenetration> c = interpenetrations(deep, inspect(deep).self_intersections);
+    REQUIRE(c.size() == 1);
+    CHECK(c[0].depth == Approx(1.0));  // corner (2, 2, 2) in the other
+    CHECK(c[0].part == Approx(std::sqrt(12.0)));
+    // a third box grazing the first: a second pair, 0.1 deep, the grazing box the smaller
     const Soup graze = test::concat(deep, test::box({-0.9, 0.5, 0.5}, {0.1, 1.5, 1.5}));
-    CHECK(least_interpenetration(graze, inspect(graze).self_intersections) == Approx(0.1));
+    c = interpenetrations(graze, inspect(graze).self_intersections);
+    REQUIRE(c.size() == 2);
+    CHECK(c[1].depth == Approx(0.1));
+    CHECK(c[1].part == Approx(std::sqrt(3.0)));
     // a component crossing itself: not a question of parts
     const Soup knot = read_soup(test::fixture("knot_tube_r1.2.off"));
-    CHECK(least_interpenetration(knot, inspect(knot).self_intersections) == 0);
+    CHECK(interpenetrations(knot, inspect(knot).self_intersections).empty());
   }
   SECTION("an outward part inside a solid is left as it is (embedded, not a cavity gone wrong)") {
     const Soup s = test::concat(outer, inner);

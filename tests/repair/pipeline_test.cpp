@@ -592,3 +592,20 @@ TEST_CASE("repair: parts that interpenetrate beyond --max-deviation go straight 
   CHECK(a.deviation == Approx(0).margin(1e-12));
   CHECK(a.out.signed_volume == Approx(15.0));
 }
+
+TEST_CASE("repair: small parts overlapping by half their size are united, not squashed apart", "[pipeline]") {
+  // A robot model's pin in its bushing, far from the body: 0.005 deep is far
+  // within --max-deviation (1% of the diagonal, ~1.7) but half the parts'
+  // size; moving them apart would deform them by as much.
+  const Soup in = test::concat(test::box({0, 0, 0}, {100, 100, 100}),
+                               test::concat(test::box({120, 50, 50}, {120.01, 50.01, 50.01}),
+                                            test::box({120.005, 50.005, 50.005}, {120.015, 50.015, 50.015})));
+  const RepairResult r = repair(in);
+  CHECK(ran(r.report, "deintersect", false));
+  CHECK(ran(r.report, "regularize", true));
+  const Assessment a = written(in, r, "pipe_small_parts.off", 0.01 * r.report.diagonal);
+  CHECK(a.certified);
+  CHECK(a.within_deviation);
+  CHECK(a.output_to_input <= a.error_bound);  // every output face on the input: removed inside, nothing moved
+  CHECK(a.components_out == 2);  // the body, and the two parts as one (the moves kept three)
+}

@@ -209,14 +209,14 @@ Nesting nesting(const Soup& soup, bool crossing) {
   return n;
 }
 
-double least_interpenetration(const Soup& soup, const std::vector<FacePair>& pairs) {
-  if (pairs.empty()) return 0;
+std::vector<Interpenetration> interpenetrations(const Soup& soup, const std::vector<FacePair>& pairs) {
+  if (pairs.empty()) return {};
   Components parts(soup);
   const std::vector<std::size_t>& component = parts.topology().face_component;
   std::set<std::pair<std::size_t, std::size_t>> crossing;
   for (const FacePair& p : pairs) {
     const std::size_t c = component[p.first], d = component[p.second];
-    if (c == d) return 0;  // a part crossing itself: local moves' work
+    if (c == d) return {};  // a part crossing itself: local moves' work
     crossing.emplace(std::min(c, d), std::max(c, d));
   }
   // How deep a vertex of c (those in d's box, up to kSamples spread over
@@ -242,9 +242,11 @@ double least_interpenetration(const Soup& soup, const std::vector<FacePair>& pai
     }
     return deepest;
   };
-  double least = std::numeric_limits<double>::infinity();
-  for (const auto& [c, d] : crossing) least = std::min(least, std::max(depth_in(c, d), depth_in(d, c)));
-  return least;
+  auto diagonal = [&](std::size_t c) { return norm(sub(parts.box(c).hi, parts.box(c).lo)); };
+  std::vector<Interpenetration> out;
+  for (const auto& [c, d] : crossing)
+    out.push_back({std::max(depth_in(c, d), depth_in(d, c)), std::min(diagonal(c), diagonal(d))});
+  return out;
 }
 
 namespace {

@@ -53,14 +53,18 @@ struct Nesting {
 Nesting nesting(const Soup& soup, bool crossing = false);
 
 /// For a closed, manifold, oriented surface whose components cross one
-/// another (`pairs`: its intersecting face pairs, indices into `soup`): how
-/// deep the shallowest crossing goes — over the pairs of components that
-/// cross, the least of how far a vertex of one lies inside the other from
-/// its surface (the deeper direction; up to 256 vertices in the other's box
-/// sampled, exact side test, distance in doubles: a measurement). 0 when a
-/// component crosses itself or nothing crosses. Parts that interpenetrate
-/// deeper than a limit are not separated by local moves within it.
-double least_interpenetration(const Soup& soup, const std::vector<FacePair>& pairs);
+/// another (`pairs`: its intersecting face pairs, indices into `soup`): per
+/// pair of components that cross, how far a vertex of one lies inside the
+/// other from its surface (the deeper direction; up to 256 vertices in the
+/// other's box sampled, exact side test, distance in doubles: a
+/// measurement), and the smaller one's bounding-box diagonal. Empty when a
+/// component crosses itself or nothing crosses. Parts that reach into each
+/// other deeper than a limit are not separated by local moves within it.
+struct Interpenetration {
+  double depth = 0;
+  double part = 0;
+};
+std::vector<Interpenetration> interpenetrations(const Soup& soup, const std::vector<FacePair>& pairs);
 
 /// `soup` with every face reversed (the same first corner, the other way round).
 Soup reversed(const Soup& soup);

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
+#include <limits>
 #include <numeric>
 
 #include "polyheal/inspect/nesting.h"
@@ -574,19 +575,28 @@ class Pipeline {
   const StageReport& deintersect() {
     return stage("deintersect", [&](StageReport& s) {
       // Parts of an assembly that interpenetrate (a vertex of each crossing
-      // pair of components deeper inside the other than --max-deviation):
-      // no move within the limit separates them, and on such inputs the
-      // moves took most of the run (three overlapping rocker arms, 53k
-      // faces: 6.5 of 8.4 s) for a union no closer than the union of the
-      // surface as given. Refused; the union follows.
+      // pair of components deeper inside the other than --max-deviation, or
+      // than a tenth of the smaller part: moving a pin half its size out of
+      // the hole it sits in is no local repair): no small move separates
+      // them, and on such inputs the moves took most of the run (three
+      // overlapping rocker arms, 53k faces: 6.5 of 8.4 s) for a union no
+      // closer than the union of the surface as given. Refused; the union
+      // follows.
       const Report& cr = cur_.report;
       if (cr.components > 1 && cr.closed && cr.oriented && cr.nonmanifold_edges.empty()) {
-        const double depth = least_interpenetration(cur_.soup, cr.self_intersections);
-        if (depth > deviation_limit()) {
+        constexpr double kPartShare = 0.1;
+        const std::vector<Interpenetration> crossings = interpenetrations(cur_.soup, cr.self_intersections);
+        bool deep = !crossings.empty();
+        double least = std::numeric_limits<double>::infinity();
+        for (const Interpenetration& c : crossings) {
+          deep = deep && c.depth > std::min(deviation_limit(), kPartShare * c.part);
+          least = std::min(least, c.depth);
+        }
+        if (deep) {
           std::ostringstream why;
-          why << "the parts that cross interpenetrate (each crossing pair of components has a vertex " << depth
+          why << "the parts that cross interpenetrate (each crossing pair of components has a vertex " << least
               << " or more inside the other, beyond --max-deviation " << deviation_limit()
-              << "): no local move within the limit separates them; their union follows";
+              << " or a tenth of the smaller part): no small local move separates them; their union follows";
           throw UnsupportedInput(why.str());
         }
       }
