@@ -3,7 +3,6 @@
 // "the algorithm ... can be applied to Boolean operation between T-meshes").
 #include <chrono>
 #include <cstdio>
-#include <numeric>
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
@@ -50,9 +49,7 @@ void add_union(CLI::App& app, int& exit_code) {
       one.input = in;
       double s = 0;
       Soup part = read_repair_input(one, progress, s);
-      std::vector<std::size_t> faces(part.face_count());
-      std::iota(faces.begin(), faces.end(), std::size_t(0));
-      if (!*keep_orientation && enclosed_volume_sign(part, faces) < 0) {
+      if (!*keep_orientation && enclosed_volume_sign(part) < 0) {
         part = reversed(part);
         std::fprintf(stderr, "polyheal: note: %s encloses negative volume (inside out): turned outwards for the union\n",
                      in.c_str());

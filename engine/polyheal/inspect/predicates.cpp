@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <utility>
 
 namespace polyheal {
@@ -509,6 +510,12 @@ bool is_nearly_degenerate(const Point3d& a, const Point3d& b, const Point3d& c, 
     const NT n2 = dot(n, n);
     return bool(n2 <= e2 * l1 * l1) || bool(n2 <= e2 * l2 * l2) || bool(n2 <= e2 * l3 * l3);
   });
+}
+
+int enclosed_volume_sign(const Soup& soup) {
+  std::vector<std::size_t> all(soup.face_count());
+  std::iota(all.begin(), all.end(), std::size_t(0));
+  return enclosed_volume_sign(soup, all);
 }
 
 int enclosed_volume_sign(const Soup& soup, const std::vector<std::size_t>& faces) {

@@ -92,5 +92,7 @@ bool is_nearly_degenerate(const Point3d& a, const Point3d& b, const Point3d& c, 
 /// outwards, negative inwards (a cavity, or inside out); for others a
 /// guess that does not change when the faces are moved far away.
 int enclosed_volume_sign(const Soup& soup, const std::vector<std::size_t>& faces);
+/// The same over every face of `soup`.
+int enclosed_volume_sign(const Soup& soup);
 
 }  // namespace polyheal

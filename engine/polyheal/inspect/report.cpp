@@ -8,7 +8,6 @@
 #include <cmath>
 #include <functional>
 #include <limits>
-#include <numeric>
 #include <set>
 
 #include "polyheal/inspect/detail/parallel.h"
@@ -254,9 +253,7 @@ void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions
     if (by_component.size() == 1) {  // the whole is its one component
       r.volume_sign = sign;
     } else {
-      std::vector<std::size_t> all(r.faces);
-      std::iota(all.begin(), all.end(), std::size_t(0));
-      r.volume_sign = enclosed_volume_sign(soup, all);
+      r.volume_sign = enclosed_volume_sign(soup);
     }
   }
   r.seconds_shape = seconds_since(t0);

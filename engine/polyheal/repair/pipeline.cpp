@@ -10,7 +10,6 @@
 #include <stdexcept>
 #include <unordered_map>
 #include <limits>
-#include <numeric>
 
 #include "polyheal/inspect/nesting.h"
 #include "polyheal/inspect/predicates.h"
@@ -629,9 +628,7 @@ class Pipeline {
     // A closed surface that encloses negative volume (exact sign) is inside
     // out whatever its overlaps: its union is empty (winding numbers <= 0),
     // and the union of the surface turned outwards is what it stands for.
-    std::vector<std::size_t> all(from.face_count());
-    std::iota(all.begin(), all.end(), std::size_t(0));
-    const bool turn = o_.orient_outward && enclosed_volume_sign(from, all) < 0;
+    const bool turn = o_.orient_outward && enclosed_volume_sign(from) < 0;
     const std::string title = turn ? std::string(name) + " (turned outwards)" : std::string(name);
     stage(title.c_str(), [&](StageReport& s) {
       RegularizeOptions ro;
