@@ -740,18 +740,25 @@ class Deintersector {
       const auto c = corners(f);
       if (sources.retry({2, std::uint32_t(id(f))}, {c[0], c[1], c[2]})) cheapest_valid(lift_ops(f), ops);
     }
-    // The last resorts (see push_ops and pair_ops), never skipped: a round
-    // before may not have come to them.
-    sources.done();
+    // The last resorts (see push_ops and pair_ops), only when nothing else
+    // applies; sources like the others: skipped when the last cost phase
+    // tried them too and nothing has changed near them since (a round that
+    // had other operations did not come to them, and keeps no reach).
     if (ops.empty() && o_.group)
-      for (face_descriptor f : intersecting) cheapest_valid(push_ops(f), ops);
-    if (ops.empty() && o_.pair) pair_ops(intersecting, ops);
+      for (face_descriptor f : intersecting) {
+        const std::vector<vertex_descriptor> nodes = nodes_crossing(f);
+        std::vector<vertex_descriptor> vs = nodes;
+        for (vertex_descriptor v : corners(f)) vs.push_back(v);
+        if (sources.retry({4, std::uint32_t(id(f))}, vs)) cheapest_valid(push_ops(f, nodes), ops);
+      }
+    if (ops.empty() && o_.pair) pair_ops(intersecting, ops, sources);
+    sources.done();
     return ops;
   }
 
   /// Which sources of operations a cost phase tries. A source (an edge's
   /// swap, a vertex's hammer moves, a face's lifts, a group move's
-  /// vertices) tried in the last cost phase reads and edits only its reach:
+  /// vertices, a face's pushes, a crossing pair's pair moves) tried in the last cost phase reads and edits only its reach:
   /// the faces two rings round its vertices (the edited stars, the faces
   /// across their edges that the fold tests read; the faces they intersect
   /// overlap them) and the boxes its trials' edited faces took (where the
@@ -881,9 +888,9 @@ class Deintersector {
   /// move along f's normal to ε on the other side, ε the hammer's rule at
   /// the shortest edge among them (one ε for the group, so a face whose
   /// corners all move keeps its shape); both sides are candidates.
-  std::vector<Op> push_ops(face_descriptor f) const {
+  /// `nodes`: nodes_crossing(f).
+  std::vector<Op> push_ops(face_descriptor f, const std::vector<vertex_descriptor>& nodes) const {
     std::vector<Op> ops;
-    const std::vector<vertex_descriptor> nodes = nodes_crossing(f);
     Point3d n;
     if (nodes.size() < 2 || !unit_normal(f, n)) return ops;
     const Point3d t1 = p3(corners(f)[0]);
@@ -930,17 +937,22 @@ class Deintersector {
   /// of f and w of g (not shared), u and w move together to the centroids
   /// of their neighbours; among one pair's candidates the smallest valid
   /// move is kept (cheapest_valid), under the same criteria as any move.
-  void pair_ops(const std::vector<face_descriptor>& faces, std::vector<Op>& ops) {
+  /// A skipped pair still claims its corner pairs in `tried`: the pairs
+  /// after it get the candidates they got when it was tried.
+  void pair_ops(const std::vector<face_descriptor>& faces, std::vector<Op>& ops, Sources& sources) {
     std::set<std::pair<std::size_t, std::size_t>> tried;
     for (face_descriptor f : faces)
       for (face_descriptor g : partners_[id(f)]) {
         if (id(g) < id(f)) continue;  // each pair once
+        const auto cf = corners(f), cg = corners(g);
+        const bool retry = sources.retry({5, std::uint32_t(id(f)), std::uint32_t(id(g))},
+                                         {cf[0], cf[1], cf[2], cg[0], cg[1], cg[2]});
         std::vector<Op> candidates;
-        for (vertex_descriptor u : corners(f))
-          for (vertex_descriptor w : corners(g)) {
+        for (vertex_descriptor u : cf)
+          for (vertex_descriptor w : cg) {
             if (has_vertex(g, u) || has_vertex(f, w)) continue;
             const std::size_t a = std::size_t(u), b = std::size_t(w);
-            if (!tried.insert({std::min(a, b), std::max(a, b)}).second) continue;
+            if (!tried.insert({std::min(a, b), std::max(a, b)}).second || !retry) continue;
             const auto to_u = least_move(u, {umbrella(u)}), to_w = least_move(w, {umbrella(w)});
             if (!to_u || !to_w) continue;
             Op op;
