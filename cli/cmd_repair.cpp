@@ -43,7 +43,7 @@ struct TetgenChecks {
   bool last_accepted = false;
 
   bool accepts(const Soup& s) {
-    if (runs && s.points == last.points && s.indices == last.indices && s.offsets == last.offsets) return last_accepted;
+    if (runs && s.same_faces(last)) return last_accepted;
     const TetgenRun run = run_tetgen(s, kTetgenSwitches);
     if (!run.ran) {  // could not start it: not a verdict on the surface
       not_run = run.output;
@@ -256,7 +256,10 @@ void run(RepairArgs& args, int& exit_code) {
       result.soup, args, progress, o.write_s,
       [&](const Soup& written) {
         progress.stage("assessing the written file");
-        o.a = assess(input, result.input, written, o.max_deviation, args.options.for_tetgen, result.hole_fills);
+        // The distances the pipeline measured hold when the file reads back
+        // as the surface it measured (else, e.g. STL's floats, measured here).
+        o.a = assess(input, result.input, written, o.max_deviation, args.options.for_tetgen, result.hole_fills, nullptr,
+                     written.same_faces(result.soup) ? &result.distances : nullptr);
         if (o.a.certified && args.options.tetgen_accepts) {
           progress.stage("TetGen on the written file");
           o.a.out.tetgen_refused = !o.tetgen.accepts(written);

@@ -15,6 +15,7 @@
 #include "polyheal/io/write.h"
 #include "polyheal/mesh/vec3.h"
 #include "polyheal/repair/near_sheets.h"
+#include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/pipeline.h"
 #include "support/builders.h"
 
@@ -370,6 +371,13 @@ TEST_CASE("assess: a hole fill cut into pieces is still a fill, not moved surfac
   CHECK(listed.deviation <= listed.error_bound);
   CHECK(listed.within_deviation);
   CHECK(listed.fill_distance > limit);  // the pieces are measured, as fills
+  // ... as the fill alone would be (assess takes the whole output's
+  // distance, the fill being what lies farthest): within the bound.
+  Soup fill = out;
+  fill.indices.assign(out.indices.end() - 9, out.indices.end());
+  fill.offsets = {0, 3, 6, 9};
+  CHECK(std::abs(listed.fill_distance - detail::one_sided_distance(fill, in, listed.error_bound)) <=
+        listed.error_bound);
 
   const Assessment unlisted = assess(in, inspect(in), out, limit, false);
   CHECK(unlisted.fill_faces == 0);
@@ -396,6 +404,53 @@ TEST_CASE("repair: holes in a self-intersecting surface: fills a union cuts are 
   CHECK(a.within_deviation);
   CHECK(a.dropped_components == 0);
   CHECK(a.fill_faces > r.hole_fills.size());  // pieces of cut fills among them
+}
+
+TEST_CASE("repair: the distances the stages measured are the result's, and assess takes them on its written file",
+          "[pipeline]") {
+  // assess() takes RepairResult::distances instead of measuring again when
+  // the file reads back as the result: they must be what measuring the
+  // result gives, whichever stage made it (fills, moves and a union on
+  // bones with holes; the moves on two boxes touching face to face; only
+  // the turn outwards at the end on an inside-out torus; fill then turn on
+  // a hollow box).
+  const Soup bones = read_soup(test::fixture("bones.off"));
+  Soup holes;
+  holes.points = bones.points;
+  for (std::size_t f = 0; f < bones.face_count(); ++f)
+    if (f % 29 != 28) holes.add_triangle(bones.face(f)[0], bones.face(f)[1], bones.face(f)[2]);
+  const Soup touching = test::concat(test::box({0, 0, 0}, {2, 2, 2}), test::box({2, 0.5, 0.5}, {3, 1.5, 1.5}));
+  const Soup hollow = test::concat(test::box({0, 0, 0}, {3, 3, 3}, true), test::box({1, 1, 1}, {2, 2, 2}));
+  Soup hollow_holed;
+  hollow_holed.points = hollow.points;
+  for (std::size_t f = 1; f < hollow.face_count(); ++f)
+    hollow_holed.add_triangle(hollow.indices[3 * f], hollow.indices[3 * f + 1], hollow.indices[3 * f + 2]);
+  const Soup torus_inside_out = reversed(read_soup(test::fixture("torus.off")));
+  const std::vector<std::pair<const char*, Soup>> inputs = {{"bones_with_holes", holes},
+                                                            {"touching_boxes", touching},
+                                                            {"torus_inside_out", torus_inside_out},
+                                                            {"hollow_box_holed", hollow_holed}};
+  for (const auto& [name, in] : inputs) {
+    INFO(name);
+    const RepairResult r = repair(in);
+    const double bound = 1e-4 * r.report.diagonal;
+    CHECK(r.distances == detail::one_sided_distances(in, r.soup, bound));
+    const std::string p = test::scratch(std::string("pipe_distances_") + name + ".off");
+    write_soup(r.soup, p);
+    const Soup back = read_soup(p);
+    REQUIRE(back.same_faces(r.soup));
+    const double limit = max_deviation_of({}, r.report.diagonal);
+    const Assessment given = assess(in, r.input, back, limit, false, r.hole_fills, nullptr, &r.distances);
+    const Assessment measured = assess(in, r.input, back, limit, false, r.hole_fills);
+    CHECK(given.input_to_output == measured.input_to_output);
+    CHECK(given.output_to_input == measured.output_to_input);
+    CHECK(given.hausdorff == measured.hausdorff);
+    CHECK(given.deviation == measured.deviation);
+    CHECK(given.within_deviation == measured.within_deviation);
+    CHECK(given.dropped_components == measured.dropped_components);
+    CHECK(given.fill_faces == measured.fill_faces);
+    CHECK(given.fill_distance == measured.fill_distance);
+  }
 }
 
 TEST_CASE("repair --for tetgen: a surface TetGen itself refuses is a defect, not a result", "[pipeline][tetgen]") {

@@ -54,6 +54,10 @@ struct Soup {
     offsets.push_back(indices.size());
   }
   bool is_triangle_soup() const { return indices.size() == 3 * face_count(); }
+  /// The same points and faces, corner for corner (groups aside).
+  bool same_faces(const Soup& other) const {
+    return points == other.points && indices == other.indices && offsets == other.offsets;
+  }
 
   /// Appends `other`'s points and faces (its indices shifted past ours; no
   /// point shared). Face groups are dropped.

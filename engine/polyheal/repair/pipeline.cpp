@@ -40,7 +40,8 @@ struct State {
   Soup soup;
   Report report;
   std::size_t defects = 0;
-  double hausdorff = 0;  // to the input
+  double hausdorff = 0;  // to the input: the larger of
+  std::array<double, 2> distances{0, 0};  // detail::one_sided_distances(input, soup, measure_bound())
   std::optional<bool> within;  // assess()ed within the deviation limit, no component dropped (asked lazily)
   double deviation = -1;       // the surface moved, as assess()ed with `within`
 };
@@ -128,6 +129,7 @@ class Pipeline {
     if (done()) {
       orient_outward();
       r.clean_in = true;
+      result_.distances = cur_.distances;
       result_.soup = std::move(cur_.soup);
       r.seconds = seconds_since(t0);
       return std::move(result_);
@@ -179,6 +181,7 @@ class Pipeline {
       }
     }
     orient_outward();
+    result_.distances = cur_.distances;
     result_.soup = std::move(cur_.soup);
     r.seconds = seconds_since(t0);
     return std::move(result_);
@@ -216,7 +219,8 @@ class Pipeline {
   /// moved no more than the limit and no input component was dropped.
   bool within_limit(State& s, const std::vector<std::array<Point3d, 3>>& fills) const {
     if (!s.within) {
-      const Assessment a = assess(input_, result_.input, s.soup, deviation_limit(), o_.for_tetgen, fills, &s.report);
+      const Assessment a =
+          assess(input_, result_.input, s.soup, deviation_limit(), o_.for_tetgen, fills, &s.report, &s.distances);
       s.within = a.within_deviation && a.dropped_components == 0;
       s.deviation = a.deviation;
     }
@@ -247,7 +251,8 @@ class Pipeline {
       s.defects_after = next.defects;
       const bool next_ok = certified(next.report, o_.for_tetgen);
       const double bound = measure_bound();
-      next.hausdorff = detail::hausdorff_distance(input_, next.soup, bound);
+      next.distances = detail::one_sided_distances(input_, next.soup, bound);
+      next.hausdorff = std::max(next.distances[0], next.distances[1]);
       s.hausdorff = next.hausdorff;
       // Better: certified where the current surface is not; when both are,
       // of the same topology (a union may merge or open up what local moves
@@ -354,6 +359,7 @@ class Pipeline {
     next.report.tetgen_refused = cur_.report.tetgen_refused;
     next.defects = defect_count(next.report, o_.for_tetgen);
     next.hausdorff = cur_.hausdorff;
+    next.distances = cur_.distances;  // the same triangles: the measure takes no orientation
     next.within = cur_.within;
     next.deviation = cur_.deviation;
     s.accepted = true;
@@ -827,7 +833,8 @@ double max_deviation_of(const RepairOptions& o, double diagonal) {
 }
 
 Assessment assess(const Soup& input, const Report& in, const Soup& written, double max_deviation, bool for_tetgen,
-                  const std::vector<std::array<Point3d, 3>>& hole_fills, const Report* written_report) {
+                  const std::vector<std::array<Point3d, 3>>& hole_fills, const Report* written_report,
+                  const std::array<double, 2>* distances) {
   Assessment a;
   if (written_report) {
     a.out = *written_report;
@@ -843,14 +850,21 @@ Assessment assess(const Soup& input, const Report& in, const Soup& written, doub
   a.max_deviation = max_deviation;
   a.error_bound = 1e-4 * a.diagonal;
   if (written.face_count() && input.face_count()) {
-    const std::array<double, 2> d = detail::one_sided_distances(input, written, a.error_bound);
+    const std::array<double, 2> d = distances ? *distances : detail::one_sided_distances(input, written, a.error_bound);
     a.input_to_output = d[0];
     a.output_to_input = d[1];
     a.hausdorff = std::max(d[0], d[1]);
     // The input outside the output's volume is measured apart only when the
     // plain distance exceeds the bound (it bounds the refined one).
     const bool refine = a.input_to_output > max_deviation;
-    const Loss loss = measure_loss(input, written, max_deviation, refine, a.certified);
+    // Every input point within the limit of the output (by the bound, with
+    // a margin for the doubles of the nearest-point queries): no input
+    // vertex is far from it, so no face is lost or absorbed.
+    Loss loss;
+    if (refine || a.input_to_output + 2 * a.error_bound > max_deviation)
+      loss = measure_loss(input, written, max_deviation, refine, a.certified);
+    else
+      loss.absorbed.assign(input.face_count(), 0);
     a.dropped_components = loss.lost_components + loss.absorbed_components;
     a.absorbed_components = loss.absorbed_components;
     a.absorbed_faces = loss.absorbed_faces;
@@ -887,7 +901,15 @@ Assessment assess(const Soup& input, const Report& in, const Soup& written, doub
     }
     double output_moved = moved.face_count() ? detail::one_sided_distance(moved, input, a.error_bound) : 0.0;
     a.fill_faces = fills.face_count();
-    if (fills.face_count()) a.fill_distance = detail::one_sided_distance(fills, input, a.error_bound);
+    // The output's faces are the moved ones and the fills: when the moved
+    // ones are certainly nearer the input than the output's farthest point
+    // (true distance at most output_moved + bound < output_to_input, itself
+    // at most the true farthest), that point is on a fill, and
+    // output_to_input measures the fills too (as bounded).
+    if (fills.face_count())
+      a.fill_distance = output_moved + a.error_bound < a.output_to_input
+                            ? a.output_to_input
+                            : detail::one_sided_distance(fills, input, a.error_bound);
     // The input inside the output's volume was removed, not moved: only
     // what lies outside it counts.
     // (The plain one-sided distance bounds it: the skipping measure may

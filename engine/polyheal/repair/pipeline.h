@@ -113,6 +113,10 @@ struct RepairResult {
   /// are in `soup` (fills a later stage changed are not listed): assess()
   /// reports them apart from moved surface.
   std::vector<std::array<Point3d, 3>> hole_fills;
+  /// detail::one_sided_distances(input, soup, 1e-4 x the input's bbox
+  /// diagonal) as the stages measured them: {input -> soup, soup -> input}
+  /// (assess() takes them for a written file that is `soup`).
+  std::array<double, 2> distances{0, 0};
 };
 
 /// Defects that keep a surface from certification: boundary, non-manifold
@@ -164,10 +168,13 @@ struct Assessment {
 
 /// `input_report`: inspect(input), which the caller has already made.
 /// `written_report`: inspect(written) with tetgen_segments = for_tetgen, if
-/// the caller has it (else it is made here).
+/// the caller has it (else it is made here). `distances`:
+/// detail::one_sided_distances(input, written, 1e-4 x the input's bbox
+/// diagonal), if the caller has measured them on this very surface (else
+/// they are measured here).
 Assessment assess(const Soup& input, const Report& input_report, const Soup& written, double max_deviation,
                   bool for_tetgen,
                   const std::vector<std::array<Point3d, 3>>& hole_fills = {},
-                  const Report* written_report = nullptr);
+                  const Report* written_report = nullptr, const std::array<double, 2>* distances = nullptr);
 
 }  // namespace polyheal
