@@ -154,6 +154,39 @@ TEST_CASE("distance: a piece over a planar fan region is bounded by its height, 
   CHECK(d.cover_bound(rows[1].piece, nearest_triangle(d, {0.501, 0.201, 0}), 0.02) == kNone);
 }
 
+TEST_CASE("distance: a piece above a tilted fine plate is bounded by its height there",
+          "[repair][distance]") {
+  // The triangles under a piece lie in the prism it sweeps along the base
+  // plane's normal, which cover_bound searches by its box: on a plate at
+  // no axis (normal with every component) of small triangles (0.05), the
+  // ones under a piece lifted off it are shifted from the piece's own box
+  // by the lift along each axis; the bound must still find them all.
+  const double c1 = std::cos(0.6), s1 = std::sin(0.6), c2 = std::cos(0.4), s2 = std::sin(0.4);
+  auto tilt = [&](const Point3d& p) {  // about x by 0.6, then about z by 0.4
+    const Point3d q{p[0], c1 * p[1] - s1 * p[2], s1 * p[1] + c1 * p[2]};
+    return Point3d{c2 * q[0] - s2 * q[1], s2 * q[0] + c2 * q[1], q[2]};
+  };
+  Soup plate;
+  const int n = 80;  // 4 x 4 in cells of 0.05
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j) plate.points.push_back(tilt({0.05 * i, 0.05 * j, 0}));
+  for (Index i = 0; i < Index(n); ++i)
+    for (Index j = 0; j < Index(n); ++j) {
+      const Index a = i * (n + 1) + j, b = a + n + 1;
+      plate.add_triangle(a, b, b + 1);
+      plate.add_triangle(a, b + 1, a + 1);
+    }
+  const detail::SurfaceDistance d(plate);
+  for (const double lift : {0.1, 0.4}) {
+    INFO("lifted by " << lift);
+    const std::array<Point3d, 3> piece{tilt({1, 1, lift}), tilt({3, 1.2, lift}), tilt({1.5, 3, lift})};
+    const std::size_t t = nearest_triangle(d, tilt({1.02, 1.02, 0}));
+    const double got = d.cover_bound(piece, t, 1.0);
+    CHECK(got >= lift - 1e-9);
+    CHECK(got <= lift + 1e-8);  // (and the margin cover_bound adds for rounding)
+  }
+}
+
 TEST_CASE("distance: a chord across a curved strip surface is bounded by the gap, not split to one strip",
           "[repair][distance]") {
   // A cylinder patch of radius 10 around the x axis tessellated as CAD

@@ -749,16 +749,22 @@ double SurfaceDistance::cover_bound(const Corners& piece, std::size_t t, double 
     return (orient2(q[1], q[2], x) * hq[0] + orient2(q[2], q[0], x) * hq[1] + orient2(q[0], q[1], x) * hq[2]) / area_q;
   };
   // A surface triangle within `limit` of a point of the piece along P's
-  // normal meets the piece's box grown by `limit`.
+  // normal meets the prism the piece sweeps along it, so the prism's box:
+  // the piece's box grown by limit |n_d| along each axis d (and a margin
+  // for the doubles of the gaps).
   Point3d lo = piece[0], hi = piece[0];
+  double scale = 0;
   for (const Point3d& c : piece)
     for (int d = 0; d < 3; ++d) {
       lo[d] = std::min(lo[d], c[d]);
       hi[d] = std::max(hi[d], c[d]);
+      scale = std::max(scale, std::abs(c[d]));
     }
+  const double margin = 1e-9 * (scale + limit);
   for (int d = 0; d < 3; ++d) {
-    lo[d] -= limit;
-    hi[d] += limit;
+    const double grow = limit * std::abs(d == 0 ? f.n.x : d == 1 ? f.n.y : f.n.z) + margin;
+    lo[d] -= grow;
+    hi[d] += grow;
   }
   struct Side {  // a side of an accepted triangle: its ends (sorted), where its third corner lies
     Point3d a, b;
