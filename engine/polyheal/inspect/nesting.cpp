@@ -242,10 +242,28 @@ std::vector<Interpenetration> interpenetrations(const Soup& soup, const std::vec
     }
     return deepest;
   };
+  // How far c strays from d's surface: the farthest of up to kSamples of
+  // c's vertices spread over them.
+  auto strays = [&](std::size_t c, std::size_t d) {
+    std::vector<Index> of_c;
+    for (std::size_t f : parts.faces(c))
+      for (Index i : welded.face(f)) of_c.push_back(i);
+    std::sort(of_c.begin(), of_c.end());
+    of_c.erase(std::unique(of_c.begin(), of_c.end()), of_c.end());
+    const std::size_t samples = std::min(kSamples, of_c.size());
+    double farthest = 0;
+    for (std::size_t k = 0; k < samples; ++k)
+      farthest = std::max(farthest, parts.squared_distance(d, welded.points[of_c[k * of_c.size() / samples]]));
+    return std::sqrt(farthest);
+  };
   auto diagonal = [&](std::size_t c) { return norm(sub(parts.box(c).hi, parts.box(c).lo)); };
+  auto outward = [&](std::size_t c) { return enclosed_volume_sign(welded, parts.faces(c)) > 0; };
   std::vector<Interpenetration> out;
-  for (const auto& [c, d] : crossing)
-    out.push_back({std::max(depth_in(c, d), depth_in(d, c)), std::min(diagonal(c), diagonal(d))});
+  for (const auto& [c, d] : crossing) {
+    Interpenetration x{std::max(depth_in(c, d), depth_in(d, c)), std::min(diagonal(c), diagonal(d))};
+    if (outward(c) && outward(d)) x.apart = diagonal(c) <= diagonal(d) ? strays(c, d) : strays(d, c);
+    out.push_back(x);
+  }
   return out;
 }
 

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <vector>
 
 #include "polyheal/inspect/self_intersections.h"
@@ -60,9 +61,15 @@ Nesting nesting(const Soup& soup, bool crossing = false);
 /// measurement), and the smaller one's bounding-box diagonal. Empty when a
 /// component crosses itself or nothing crosses. Parts that reach into each
 /// other deeper than a limit are not separated by local moves within it.
+/// `apart`: when both parts enclose positive volume (neither is a cavity's
+/// wall), how far the smaller one strays from the other's surface (the
+/// largest distance of up to 256 of its vertices spread over it; +infinity
+/// otherwise): small, they are one part given twice, or nearly, which no
+/// local move makes two.
 struct Interpenetration {
   double depth = 0;
   double part = 0;
+  double apart = std::numeric_limits<double>::infinity();
 };
 std::vector<Interpenetration> interpenetrations(const Soup& soup, const std::vector<FacePair>& pairs);
 
