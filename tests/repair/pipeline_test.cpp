@@ -648,7 +648,7 @@ TEST_CASE("repair: parts that interpenetrate beyond --max-deviation go straight 
   CHECK(a.out.signed_volume == Approx(15.0));
 }
 
-TEST_CASE("repair: a part given twice goes straight to the union of its copies; a thin wall and its cavity do not",
+TEST_CASE("repair: a part given twice goes straight to the union of its copies, a thin wall and its cavity do not",
           "[pipeline]") {
   // Two copies of a sphere 1e-5 apart cross each other all over, each
   // within 1e-5 of the other: no local move makes them two parts (they
