@@ -8,6 +8,8 @@
 #include <limits>
 #include <random>
 
+#include <tbb/global_control.h>
+
 #include "polyheal/mesh/mesh.h"
 #include "polyheal/repair/detail/distance.h"
 #include "support/builders.h"
@@ -351,6 +353,12 @@ TEST_CASE("distance: a wall removed inside a union counts as removed, not as mov
   CHECK(d <= 5 * error);
   // without skipping, the wall's centre is half a unit from the union's surface
   CHECK(detail::one_sided_distances(cubes, united, error)[0] >= 0.5 - 1e-12);
+  // The pieces are stepped in parallel, in batches: on one thread the very
+  // same result.
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    CHECK(detail::one_sided_distance_skipping(cubes, united, error, inside) == d);
+  }
 }
 
 TEST_CASE("distance: input wholly inside the other surface, just under it all over, counts nothing", "[repair][distance]") {

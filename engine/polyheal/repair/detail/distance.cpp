@@ -188,7 +188,6 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
     query(every);
   }
   constexpr std::size_t kSkippedSplitBudget = 50000;
-  std::size_t skipped_splits = 0;
   std::vector<char> skipped(corners.size(), 0);
   if (skip)
     tbb::parallel_for(std::size_t(0), corners.size(), [&](std::size_t i) { skipped[i] = (*skip)(corners[i]); });
@@ -209,77 +208,108 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
     stack.push_back(piece);
   }
   if (skip) std::make_heap(stack.begin(), stack.end(), larger);
-  // Bisects the pieces of `work` against the lower bound `bound`, which it
-  // raises. (The split budget is touched only with `skip`: serial.)
-  auto drain = [&](std::vector<Piece>& work, double& bound) {
-    while (!work.empty()) {
-      if (skip) std::pop_heap(work.begin(), work.end(), larger);
-      Piece piece = work.back();
-      work.pop_back();
-      const std::array<double, 3> edge{norm(piece.p[1], piece.p[2]), norm(piece.p[2], piece.p[0]),
-                                       norm(piece.p[0], piece.p[1])};  // edge k is opposite corner k
-      const int k = static_cast<int>(std::max_element(edge.begin(), edge.end()) - edge.begin());
-      // All corners skipped: a point of the piece that is not skipped lies
-      // beyond a crossing of `to` on its segment to a corner, so within the
-      // longest edge of `to`; and the piece cannot reach `to` at all when its
-      // corners are farther than that edge.
-      if (piece.skipped[0] && piece.skipped[1] && piece.skipped[2]) {
-        if (edge[k] <= bound + error_bound || *std::min_element(piece.d.begin(), piece.d.end()) > edge[k]) continue;
-        // skip changes only where the piece crosses `to`: crossing nothing,
-        // it is skipped whole.
-        if (!to.meets(piece.p)) continue;
-        // Input running just inside `to` over a large area would take pieces
-        // of the error bound's size: past a budget, such a piece counts with
-        // a bound on all its points, the smaller of its longest edge and its
-        // convexity bound (the result then over-estimates, never
-        // under-estimates).
-        if (++skipped_splits > kSkippedSplitBudget) {
-          bound = std::max(bound, std::min(edge[k], upper_bound(piece)));
-          continue;
-        }
-      }
-      // 1-Lipschitz bound first (free), then the convexity bound
-      if (*std::min_element(piece.d.begin(), piece.d.end()) + edge[k] <= bound + error_bound) continue;
-      if (upper_bound(piece) <= bound + error_bound) continue;
-      // A piece over a region tessellated by thin triangles (a CAD fan, or
-      // the same curved surface tessellated anew): no one triangle is near
-      // all its corners, but the region is. (Asked only of pieces longer
-      // than the distance sought: smaller ones are done by a few bisections,
-      // cheaper than a search of the region within that distance.)
-      // (Not when a corner is beyond that distance itself — a corner `skip`
-      // rules out, inside a volume: no bound on the piece is below it. Along
-      // a crossing of `to`, every mixed piece is such, and the search was most
-      // of the measure.)
-      if (edge[k] > bound + error_bound &&
-          *std::max_element(piece.d.begin(), piece.d.end()) <= (bound + error_bound) * (1 + 1e-6) &&
-          to.cover_bound(piece.p, piece.best, bound + error_bound) <= bound + error_bound)
-        continue;
-      const int i = (k + 1) % 3, j = (k + 2) % 3;  // the longest edge runs from corner i to corner j
-      Point3d m;
-      for (int c = 0; c < 3; ++c) m[c] = 0.5 * (piece.p[i][c] + piece.p[j][c]);
-      if (m == piece.p[i] || m == piece.p[j]) continue;  // no double left between them
-      const auto [dm2, near] = to.nearest(m, piece.best);
-      const double dm = std::sqrt(dm2);
-      const bool skip_m = skip && (*skip)(m);
-      if (!skip_m) bound = std::max(bound, dm);
-      Piece a = piece, b = piece;
-      a.p[j] = m;
-      a.d[j] = dm;
-      a.near[j] = near;
-      a.skipped[j] = skip_m;
-      b.p[i] = m;
-      b.d[i] = dm;
-      b.near[i] = near;
-      b.skipped[i] = skip_m;
-      for (Piece* half : {&a, &b}) {
-        half->longest = longest_edge(half->p);
-        work.push_back(*half);
-        if (skip) std::push_heap(work.begin(), work.end(), larger);
-      }
+  // What becomes of one piece against the lower bound `bound` (read only).
+  struct Step {
+    bool split = false;     // into `half`, the midpoint's distance `raise` (0 when skipped)
+    double raise = 0;
+    std::array<Piece, 2> half;
+    bool budgeted = false;  // an all-skipped piece that meets `to`: it counts against the split budget,
+    double counted = 0;     // and past it, counts with this bound on all its points instead
+  };
+  auto step = [&](Piece piece, double bound) {
+    Step s;
+    const std::array<double, 3> edge{norm(piece.p[1], piece.p[2]), norm(piece.p[2], piece.p[0]),
+                                     norm(piece.p[0], piece.p[1])};  // edge k is opposite corner k
+    const int k = static_cast<int>(std::max_element(edge.begin(), edge.end()) - edge.begin());
+    // All corners skipped: a point of the piece that is not skipped lies
+    // beyond a crossing of `to` on its segment to a corner, so within the
+    // longest edge of `to`; and the piece cannot reach `to` at all when its
+    // corners are farther than that edge.
+    if (piece.skipped[0] && piece.skipped[1] && piece.skipped[2]) {
+      if (edge[k] <= bound + error_bound || *std::min_element(piece.d.begin(), piece.d.end()) > edge[k]) return s;
+      // skip changes only where the piece crosses `to`: crossing nothing,
+      // it is skipped whole.
+      if (!to.meets(piece.p)) return s;
+      // Input running just inside `to` over a large area would take pieces
+      // of the error bound's size: past a budget, such a piece counts with
+      // a bound on all its points, the smaller of its longest edge and its
+      // convexity bound (the result then over-estimates, never
+      // under-estimates).
+      Piece copy = piece;
+      s.budgeted = true;
+      s.counted = std::min(edge[k], upper_bound(copy));
+    }
+    // 1-Lipschitz bound first (free), then the convexity bound
+    if (*std::min_element(piece.d.begin(), piece.d.end()) + edge[k] <= bound + error_bound) return s;
+    if (upper_bound(piece) <= bound + error_bound) return s;
+    // A piece over a region tessellated by thin triangles (a CAD fan, or
+    // the same curved surface tessellated anew): no one triangle is near
+    // all its corners, but the region is. (Asked only of pieces longer
+    // than the distance sought: smaller ones are done by a few bisections,
+    // cheaper than a search of the region within that distance.)
+    // (Not when a corner is beyond that distance itself — a corner `skip`
+    // rules out, inside a volume: no bound on the piece is below it. Along
+    // a crossing of `to`, every mixed piece is such, and the search was most
+    // of the measure.)
+    if (edge[k] > bound + error_bound &&
+        *std::max_element(piece.d.begin(), piece.d.end()) <= (bound + error_bound) * (1 + 1e-6) &&
+        to.cover_bound(piece.p, piece.best, bound + error_bound) <= bound + error_bound)
+      return s;
+    const int i = (k + 1) % 3, j = (k + 2) % 3;  // the longest edge runs from corner i to corner j
+    Point3d m;
+    for (int c = 0; c < 3; ++c) m[c] = 0.5 * (piece.p[i][c] + piece.p[j][c]);
+    if (m == piece.p[i] || m == piece.p[j]) return s;  // no double left between them
+    const auto [dm2, near] = to.nearest(m, piece.best);
+    const double dm = std::sqrt(dm2);
+    const bool skip_m = skip && (*skip)(m);
+    s.split = true;
+    s.raise = skip_m ? 0.0 : dm;
+    Piece &a = s.half[0] = piece, &b = s.half[1] = piece;
+    a.p[j] = m;
+    a.d[j] = dm;
+    a.near[j] = near;
+    a.skipped[j] = skip_m;
+    b.p[i] = m;
+    b.d[i] = dm;
+    b.near[i] = near;
+    b.skipped[i] = skip_m;
+    for (Piece& half : s.half) half.longest = longest_edge(half.p);
+    return s;
+  };
+  // Applies a step to `work` and the bound; `splits` counts the budgeted ones.
+  auto apply = [&](const Step& s, std::vector<Piece>& work, double& bound, std::size_t& splits) {
+    if (s.budgeted && ++splits > kSkippedSplitBudget) {
+      bound = std::max(bound, s.counted);
+      return;
+    }
+    if (!s.split) return;
+    bound = std::max(bound, s.raise);
+    for (const Piece& half : s.half) {
+      work.push_back(half);
+      if (skip) std::push_heap(work.begin(), work.end(), larger);
     }
   };
-  if (skip) {  // one shared stack: the split budget is global
-    drain(stack, lower);
+  if (skip) {
+    // One shared heap (the split budget is global), taken kBatch largest
+    // pieces at a time: each batch stepped in parallel against the bound as
+    // it stood, then applied in order — the result does not depend on the
+    // scheduling (a piece does not see what the others of its batch raise).
+    constexpr std::size_t kBatch = 64;
+    std::size_t splits = 0;
+    std::vector<Piece> batch;
+    std::vector<Step> steps;
+    while (!stack.empty()) {
+      batch.clear();
+      while (!stack.empty() && batch.size() < kBatch) {
+        std::pop_heap(stack.begin(), stack.end(), larger);
+        batch.push_back(stack.back());
+        stack.pop_back();
+      }
+      steps.assign(batch.size(), Step());
+      const double bound = lower;
+      tbb::parallel_for(std::size_t(0), batch.size(), [&](std::size_t i) { steps[i] = step(batch[i], bound); });
+      for (const Step& s : steps) apply(s, stack, lower, splits);
+    }
     return lower;
   }
   // Each triangle on its own, from the corners' bound, in parallel: the
@@ -288,7 +318,12 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
   std::vector<double> found(stack.size(), lower);
   tbb::parallel_for(std::size_t(0), stack.size(), [&](std::size_t i) {
     std::vector<Piece> own{stack[i]};
-    drain(own, found[i]);
+    std::size_t splits = 0;  // (none counted: nothing is skipped)
+    while (!own.empty()) {
+      const Piece piece = own.back();
+      own.pop_back();
+      apply(step(piece, found[i]), own, found[i], splits);
+    }
   });
   for (double d : found) lower = std::max(lower, d);
   return lower;
