@@ -219,41 +219,39 @@ std::vector<Interpenetration> interpenetrations(const Soup& soup, const std::vec
     if (c == d) return {};  // a part crossing itself: local moves' work
     crossing.emplace(std::min(c, d), std::max(c, d));
   }
-  // How deep a vertex of c (those in d's box, up to kSamples spread over
-  // them) lies inside d.
+  // Up to kSamples of c's vertices spread over them; with `in`, only those
+  // strictly inside d's box.
   constexpr std::size_t kSamples = 256;
   const Soup& welded = parts.welded();
-  auto depth_in = [&](std::size_t c, std::size_t d) {
-    std::vector<Index> in_box;
+  auto sampled = [&](std::size_t c, const Box* in) {
+    std::vector<Index> all;
     for (std::size_t f : parts.faces(c))
       for (Index i : welded.face(f)) {
         const Point3d& p = welded.points[i];
         bool within = true;
-        for (int k = 0; k < 3; ++k) within = within && p[k] > parts.box(d).lo[k] && p[k] < parts.box(d).hi[k];
-        if (within) in_box.push_back(i);
+        for (int k = 0; k < 3 && in; ++k) within = within && p[k] > in->lo[k] && p[k] < in->hi[k];
+        if (within) all.push_back(i);
       }
-    std::sort(in_box.begin(), in_box.end());
-    in_box.erase(std::unique(in_box.begin(), in_box.end()), in_box.end());
-    const std::size_t samples = std::min(kSamples, in_box.size());
+    std::sort(all.begin(), all.end());
+    all.erase(std::unique(all.begin(), all.end()), all.end());
+    const std::size_t samples = std::min(kSamples, all.size());
+    std::vector<Index> out(samples);
+    for (std::size_t k = 0; k < samples; ++k) out[k] = all[k * all.size() / samples];
+    return out;
+  };
+  // How deep a vertex of c (sampled in d's box) lies inside d.
+  auto depth_in = [&](std::size_t c, std::size_t d) {
     double deepest = 0;
-    for (std::size_t k = 0; k < samples; ++k) {
-      const Point3d& p = welded.points[in_box[k * in_box.size() / samples]];
+    for (Index i : sampled(c, &parts.box(d))) {
+      const Point3d& p = welded.points[i];
       if (parts.inside(d, p)) deepest = std::max(deepest, std::sqrt(parts.squared_distance(d, p)));
     }
     return deepest;
   };
-  // How far c strays from d's surface: the farthest of up to kSamples of
-  // c's vertices spread over them.
+  // How far c strays from d's surface: the farthest of c's sampled vertices.
   auto strays = [&](std::size_t c, std::size_t d) {
-    std::vector<Index> of_c;
-    for (std::size_t f : parts.faces(c))
-      for (Index i : welded.face(f)) of_c.push_back(i);
-    std::sort(of_c.begin(), of_c.end());
-    of_c.erase(std::unique(of_c.begin(), of_c.end()), of_c.end());
-    const std::size_t samples = std::min(kSamples, of_c.size());
     double farthest = 0;
-    for (std::size_t k = 0; k < samples; ++k)
-      farthest = std::max(farthest, parts.squared_distance(d, welded.points[of_c[k * of_c.size() / samples]]));
+    for (Index i : sampled(c, nullptr)) farthest = std::max(farthest, parts.squared_distance(d, welded.points[i]));
     return std::sqrt(farthest);
   };
   auto diagonal = [&](std::size_t c) { return norm(sub(parts.box(c).hi, parts.box(c).lo)); };

@@ -40,8 +40,8 @@ struct State {
   Soup soup;
   Report report;
   std::size_t defects = 0;
-  double hausdorff = 0;  // to the input: the larger of
   std::array<double, 2> distances{0, 0};  // detail::one_sided_distances(input, soup, measure_bound())
+  double hausdorff() const { return std::max(distances[0], distances[1]); }  // to the input
   std::optional<bool> within;  // assess()ed within the deviation limit, no component dropped (asked lazily)
   double deviation = -1;       // the surface moved, as assess()ed with `within`
 };
@@ -154,7 +154,7 @@ class Pipeline {
     if (!done()) orient_outward(true);
     std::optional<Soup> before_moves;  // the closed surface local moves started from
     if (wanted(kStepDeintersect) && !done() && !cur_.report.self_intersections.empty()) {
-      const double before = cur_.hausdorff;
+      const double before = cur_.hausdorff();
       if (cur_.report.closed) before_moves = cur_.soup;
       const StageReport& moves = deintersect();
       if (!moves.accepted || before + moves.hausdorff <= measure_bound()) before_moves.reset();
@@ -252,8 +252,7 @@ class Pipeline {
       const bool next_ok = certified(next.report, o_.for_tetgen);
       const double bound = measure_bound();
       next.distances = detail::one_sided_distances(input_, next.soup, bound);
-      next.hausdorff = std::max(next.distances[0], next.distances[1]);
-      s.hausdorff = next.hausdorff;
+      s.hausdorff = next.hausdorff();
       // Better: certified where the current surface is not; when both are,
       // of the same topology (a union may merge or open up what local moves
       // kept apart) and closer to the input; else fewer defects.
@@ -262,7 +261,7 @@ class Pipeline {
       const bool empty = next.soup.face_count() == 0;
       const bool both_ok = next_ok && done();
       bool better = !empty && (both_ok ? topology_of(next.report) == topology_of(cur_.report) &&
-                                             next.hausdorff + bound < cur_.hausdorff
+                                             next.hausdorff() + bound < cur_.hausdorff()
                                        : next_ok || next.defects < cur_.defects);
       // Both certified, but the current surface moved beyond the deviation
       // limit (local moves pushing apart parts that touch or overlap): a
@@ -275,7 +274,7 @@ class Pipeline {
       // filled surface), so they are what it is assessed with, as on keeping.
       const std::vector<std::array<Point3d, 3>>& next_fills =
           pending_fills_.empty() ? result_.hole_fills : pending_fills_;
-      if (!better && both_ok && !empty && cur_.hausdorff > deviation_limit() &&
+      if (!better && both_ok && !empty && cur_.hausdorff() > deviation_limit() &&
           !within_limit(cur_, result_.hole_fills) && within_limit(next, next_fills)) {
         better = true;
         s.outcome += (s.outcome.empty() ? "" : "; ") +
@@ -287,7 +286,7 @@ class Pipeline {
       // the smaller repair — a union of the surface as given moves nothing,
       // local moves before it moved vertices for nothing.
       if (!better && both_ok && !empty && topology_of(next.report) == topology_of(cur_.report) &&
-          std::abs(next.hausdorff - cur_.hausdorff) <= bound) {
+          std::abs(next.hausdorff() - cur_.hausdorff()) <= bound) {
         const bool cur_within = within_limit(cur_, result_.hole_fills);
         const bool next_within = within_limit(next, next_fills);
         if ((next_within || !cur_within) && next.deviation + bound < cur_.deviation) {
@@ -358,14 +357,13 @@ class Pipeline {
     next.report = inspect(next.soup, io);
     next.report.tetgen_refused = cur_.report.tetgen_refused;
     next.defects = defect_count(next.report, o_.for_tetgen);
-    next.hausdorff = cur_.hausdorff;
     next.distances = cur_.distances;  // the same triangles: the measure takes no orientation
     next.within = cur_.within;
     next.deviation = cur_.deviation;
     s.accepted = true;
     s.faces_out = next.soup.face_count();
     s.defects_after = next.defects;
-    s.hausdorff = next.hausdorff;
+    s.hausdorff = next.hausdorff();
     s.max_displacement = 0;
     s.counts = {{"inside_out_components", double(n.inside_out_count)},
                 {"components_turned", double(components)},

@@ -221,6 +221,7 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
     const std::array<double, 3> edge{norm(piece.p[1], piece.p[2]), norm(piece.p[2], piece.p[0]),
                                      norm(piece.p[0], piece.p[1])};  // edge k is opposite corner k
     const int k = static_cast<int>(std::max_element(edge.begin(), edge.end()) - edge.begin());
+    double convex = -1;  // upper_bound(piece), once asked (it leaves piece.best at its triangle)
     // All corners skipped: a point of the piece that is not skipped lies
     // beyond a crossing of `to` on its segment to a corner, so within the
     // longest edge of `to`; and the piece cannot reach `to` at all when its
@@ -235,13 +236,13 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
       // a bound on all its points, the smaller of its longest edge and its
       // convexity bound (the result then over-estimates, never
       // under-estimates).
-      Piece copy = piece;
       s.budgeted = true;
-      s.counted = std::min(edge[k], upper_bound(copy));
+      convex = upper_bound(piece);
+      s.counted = std::min(edge[k], convex);
     }
     // 1-Lipschitz bound first (free), then the convexity bound
     if (*std::min_element(piece.d.begin(), piece.d.end()) + edge[k] <= bound + error_bound) return s;
-    if (upper_bound(piece) <= bound + error_bound) return s;
+    if ((convex >= 0 ? convex : upper_bound(piece)) <= bound + error_bound) return s;
     // A piece over a region tessellated by thin triangles (a CAD fan, or
     // the same curved surface tessellated anew): no one triangle is near
     // all its corners, but the region is. (Asked only of pieces longer
