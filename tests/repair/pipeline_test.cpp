@@ -350,12 +350,8 @@ TEST_CASE("assess: a hole fill cut into pieces is still a fill, not moved surfac
   // stage may do to a fill). Only the whole fill is listed; its pieces
   // span the hole, up to a third of an edge from the input.
   const Soup sphere = test::icosphere(1.0, 2);
-  Soup in, out;
-  in.points = out.points = sphere.points;
-  for (std::size_t f = 1; f < sphere.face_count(); ++f) {
-    in.add_triangle(sphere.face(f)[0], sphere.face(f)[1], sphere.face(f)[2]);
-    out.add_triangle(sphere.face(f)[0], sphere.face(f)[1], sphere.face(f)[2]);
-  }
+  const Soup in = test::without_faces(sphere, [](std::size_t f) { return f == 0; });
+  Soup out = in;
   const Index a = sphere.face(0)[0], b = sphere.face(0)[1], c = sphere.face(0)[2];
   const Point3d &pa = sphere.points[a], &pb = sphere.points[b], &pc = sphere.points[c];
   const Index m = Index(out.points.size());
@@ -390,11 +386,8 @@ TEST_CASE("repair: holes in a self-intersecting surface: fills a union cuts are 
   // surface (regularize without local moves) moves nothing but cuts some
   // fills. Kept, and the written file within the limit, only when those
   // pieces count as fills.
-  const Soup bones = read_soup(test::fixture("bones.off"));
-  Soup in;
-  in.points = bones.points;
-  for (std::size_t f = 0; f < bones.face_count(); ++f)
-    if (f % 29 != 28) in.add_triangle(bones.face(f)[0], bones.face(f)[1], bones.face(f)[2]);
+  const Soup in =
+      test::without_faces(read_soup(test::fixture("bones.off")), [](std::size_t f) { return f % 29 == 28; });
   const RepairResult r = repair(in);
   REQUIRE(ran(r.report, "regularize (without local moves)", true));
   const std::string p = test::scratch("bones_holes.off");
@@ -414,17 +407,12 @@ TEST_CASE("repair: the distances the stages measured are the result's, and asses
   // bones with holes; the moves on two boxes touching face to face; only
   // the turn outwards at the end on an inside-out torus; fill then turn on
   // a hollow box).
-  const Soup bones = read_soup(test::fixture("bones.off"));
-  Soup holes;
-  holes.points = bones.points;
-  for (std::size_t f = 0; f < bones.face_count(); ++f)
-    if (f % 29 != 28) holes.add_triangle(bones.face(f)[0], bones.face(f)[1], bones.face(f)[2]);
+  const Soup holes =
+      test::without_faces(read_soup(test::fixture("bones.off")), [](std::size_t f) { return f % 29 == 28; });
   const Soup touching = test::concat(test::box({0, 0, 0}, {2, 2, 2}), test::box({2, 0.5, 0.5}, {3, 1.5, 1.5}));
-  const Soup hollow = test::concat(test::box({0, 0, 0}, {3, 3, 3}, true), test::box({1, 1, 1}, {2, 2, 2}));
-  Soup hollow_holed;
-  hollow_holed.points = hollow.points;
-  for (std::size_t f = 1; f < hollow.face_count(); ++f)
-    hollow_holed.add_triangle(hollow.indices[3 * f], hollow.indices[3 * f + 1], hollow.indices[3 * f + 2]);
+  const Soup hollow_holed =
+      test::without_faces(test::concat(test::box({0, 0, 0}, {3, 3, 3}, true), test::box({1, 1, 1}, {2, 2, 2})),
+                          [](std::size_t f) { return f == 0; });
   const Soup torus_inside_out = reversed(read_soup(test::fixture("torus.off")));
   const std::vector<std::pair<const char*, Soup>> inputs = {{"bones_with_holes", holes},
                                                             {"touching_boxes", touching},
@@ -546,11 +534,8 @@ TEST_CASE("repair: an inside-out surface is turned outwards moving nothing (--ke
 
 TEST_CASE("repair: an inside-out box with a hole is filled then turned outwards and its cavity stays a cavity",
           "[pipeline]") {
-  Soup in = test::concat(test::box({0, 0, 0}, {3, 3, 3}, true), test::box({1, 1, 1}, {2, 2, 2}));
-  Soup holed;
-  holed.points = in.points;
-  for (std::size_t f = 1; f < in.face_count(); ++f)  // face 0 of the shell missing
-    holed.add_triangle(in.indices[3 * f], in.indices[3 * f + 1], in.indices[3 * f + 2]);
+  const Soup in = test::concat(test::box({0, 0, 0}, {3, 3, 3}, true), test::box({1, 1, 1}, {2, 2, 2}));
+  const Soup holed = test::without_faces(in, [](std::size_t f) { return f == 0; });  // face 0 of the shell missing
   REQUIRE_FALSE(inspect(holed).closed);
   const RepairResult r = repair(holed);
   CHECK(ran(r.report, "clean", true));

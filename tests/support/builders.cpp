@@ -39,6 +39,14 @@ Soup concat(const Soup& a, const Soup& b) {
   return s;
 }
 
+Soup without_faces(const Soup& s, const std::function<bool(std::size_t)>& drop) {
+  Soup out;
+  out.points = s.points;
+  for (std::size_t f = 0; f < s.face_count(); ++f)
+    if (!drop(f)) out.add_face(s.face(f).begin(), s.face(f).end());
+  return out;
+}
+
 /// A sphere of radius r: an icosahedron subdivided `levels` times, its
 /// vertices pushed onto the sphere.
 Soup icosphere(double r, int levels) {

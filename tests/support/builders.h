@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <initializer_list>
 #include <set>
 #include <string>
@@ -21,6 +22,8 @@ Soup tetrahedron(double dx = 0, double dy = 0, double dz = 0);
 Soup box(const Point3d& lo, const Point3d& hi, bool inward = false);
 /// Concatenates soups (indices shifted; points not shared).
 Soup concat(const Soup& a, const Soup& b);
+/// `s` without the faces `drop` picks (its points all kept): holes.
+Soup without_faces(const Soup& s, const std::function<bool(std::size_t)>& drop);
 /// A sphere of radius r about the origin: an icosahedron subdivided
 /// `levels` times, its vertices pushed onto the sphere (20 * 4^levels faces).
 Soup icosphere(double r, int levels);
