@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <unordered_map>
 
 #include "polyheal/mesh/union_find.h"
 
@@ -79,26 +78,45 @@ Soup apply_weld(const Soup& soup, const Weld& weld) {
 std::vector<Index> weld_near_points(const std::vector<Point3d>& pts, const std::vector<Index>& identical, double d,
                              std::size_t& merged, double& max_move) {
   UnionFind uf(pts.size());
-  std::unordered_map<std::uint64_t, std::vector<Index>> grid;
   auto cell = [&](double x) { return std::int64_t(std::floor(x / d)); };
   auto key = [](std::int64_t i, std::int64_t j, std::int64_t k) {
     return (std::uint64_t(i & 0x1FFFFF) << 42) | (std::uint64_t(j & 0x1FFFFF) << 21) | std::uint64_t(k & 0x1FFFFF);
+  };
+  // The grid's occupied cells in a flat table (open addressing, linear
+  // probing), each the head of a list of its points through `next`: with
+  // d far below the point spacing nearly every point has a cell of its
+  // own, and a node-based map allocated one list per point (1.2 s of a
+  // 1M-face scan's repair).
+  std::size_t capacity = 16;
+  while (capacity < 2 * pts.size()) capacity *= 2;
+  const std::size_t mask = capacity - 1;
+  constexpr Index kNone = ~Index(0);
+  std::vector<std::uint64_t> cell_key(capacity);
+  std::vector<Index> head(capacity, kNone), next(pts.size(), kNone);
+  auto slot_of = [&](std::uint64_t k) {  // k's slot, or the empty one where it would go
+    std::uint64_t h = k;  // splitmix64's finalizer: the keys' bits are fields
+    h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ull;
+    h = (h ^ (h >> 27)) * 0x94D049BB133111EBull;
+    std::size_t slot = static_cast<std::size_t>(h ^ (h >> 31)) & mask;
+    while (head[slot] != kNone && cell_key[slot] != k) slot = (slot + 1) & mask;
+    return slot;
   };
   for (Index v = 0; v < pts.size(); ++v) {
     if (identical[v] != v) continue;
     const std::int64_t ci = cell(pts[v][0]), cj = cell(pts[v][1]), ck = cell(pts[v][2]);
     for (std::int64_t i = ci - 1; i <= ci + 1; ++i)
       for (std::int64_t j = cj - 1; j <= cj + 1; ++j)
-        for (std::int64_t k = ck - 1; k <= ck + 1; ++k) {
-          auto it = grid.find(key(i, j, k));
-          if (it == grid.end()) continue;
-          for (Index w : it->second) {
+        for (std::int64_t k = ck - 1; k <= ck + 1; ++k)
+          for (Index w = head[slot_of(key(i, j, k))]; w != kNone; w = next[w]) {
             double s = 0;
             for (int c = 0; c < 3; ++c) s += (pts[v][c] - pts[w][c]) * (pts[v][c] - pts[w][c]);
             if (s <= d * d) uf.unite(v, w);
           }
-        }
-    grid[key(ci, cj, ck)].push_back(v);
+    const std::uint64_t own = key(ci, cj, ck);
+    const std::size_t slot = slot_of(own);
+    cell_key[slot] = own;
+    next[v] = head[slot];
+    head[slot] = v;
   }
   std::vector<Index> first(pts.size(), Index(-1)), rep(pts.size());
   for (Index v = 0; v < pts.size(); ++v) {

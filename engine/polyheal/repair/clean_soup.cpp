@@ -135,21 +135,21 @@ std::size_t split_t_junctions(const std::vector<Point3d>& pts, std::vector<Tri>&
   using Q = CGAL::Exact_rational;
   std::size_t inserted = 0;
   for (int pass = 0; pass < 16; ++pass) {
-    std::unordered_map<std::uint64_t, std::pair<std::size_t, int>> once;  // edge -> (face, corner) while used once
-    std::unordered_map<std::uint64_t, int> uses;
+    // The edges used once, by sorting every (edge, face, corner).
+    std::vector<std::pair<std::uint64_t, std::size_t>> sides(3 * tris.size());  // (edge, 3 face + corner)
     for (std::size_t f = 0; f < tris.size(); ++f)
-      for (int k = 0; k < 3; ++k) {
-        const std::uint64_t e = undirected_edge_key(tris[f][k], tris[f][(k + 1) % 3]);
-        if (++uses[e] == 1) once[e] = {f, k};
-      }
+      for (int k = 0; k < 3; ++k) sides[3 * f + k] = {undirected_edge_key(tris[f][k], tris[f][(k + 1) % 3]), 3 * f + k};
+    std::sort(sides.begin(), sides.end());
     std::vector<std::pair<std::size_t, int>> border;  // (face, corner): edge corner -> corner+1
     std::vector<Index> border_vertices;
-    for (const auto& [e, n] : uses)
-      if (n == 1) {
-        border.push_back(once[e]);
-        border_vertices.push_back(Index(e >> 32));
-        border_vertices.push_back(Index(e & 0xFFFFFFFFu));
-      }
+    for (std::size_t a = 0, b; a < sides.size(); a = b) {
+      for (b = a + 1; b < sides.size() && sides[b].first == sides[a].first;) ++b;
+      if (b - a != 1) continue;
+      const std::uint64_t e = sides[a].first;
+      border.push_back({sides[a].second / 3, int(sides[a].second % 3)});
+      border_vertices.push_back(Index(e >> 32));
+      border_vertices.push_back(Index(e & 0xFFFFFFFFu));
+    }
     if (border.empty()) break;
     std::sort(border.begin(), border.end());
     std::sort(border_vertices.begin(), border_vertices.end());
@@ -236,54 +236,53 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
   // the prevailing orientation is kept. A cancelled group is given back one
   // copy where the surface around it needs exactly that copy (see below).
   {
-    std::unordered_map<std::uint64_t, std::vector<std::size_t>> by_set;  // hashed; exact comparison below
+    // Copies found by sorting the faces by their sorted vertex triple (a
+    // node-based map from triple to faces allocated a list per face: 1.4 s
+    // of a 1M-face scan's repair). A group's copies come in face order and
+    // the groups in the order of their first face.
     auto sorted = [](Tri t) {
       std::sort(t.begin(), t.end());
       return t;
     };
-    for (std::size_t i = 0; i < tris.size(); ++i) {
-      const Tri s = sorted(tris[i]);
-      by_set[(std::uint64_t(s[0]) * 0x9E3779B97F4A7C15ull) ^ (std::uint64_t(s[1]) << 21) ^ s[2]].push_back(i);
+    std::vector<std::pair<Tri, std::size_t>> by_set(tris.size());
+    for (std::size_t i = 0; i < tris.size(); ++i) by_set[i] = {sorted(tris[i]), i};
+    std::sort(by_set.begin(), by_set.end());
+    std::vector<std::pair<std::size_t, std::size_t>> runs;  // (first face, start in by_set) of each group of copies
+    for (std::size_t a = 0, b; a < by_set.size(); a = b) {
+      for (b = a + 1; b < by_set.size() && by_set[b].first == by_set[a].first;) ++b;
+      if (b - a >= 2) runs.push_back({by_set[a].second, a});
     }
+    std::sort(runs.begin(), runs.end());
     std::vector<char> keep(tris.size(), 1);
     std::vector<CancelledGroup> cancelled_groups;
-    for (auto& [h, list] : by_set) {
-      if (list.size() < 2) continue;
-      std::vector<char> done(list.size(), 0);
-      for (std::size_t a = 0; a < list.size(); ++a) {
-        if (done[a]) continue;
-        const Tri s = sorted(tris[list[a]]);
-        std::vector<std::size_t> copies;
-        for (std::size_t b = a; b < list.size(); ++b)
-          if (!done[b] && sorted(tris[list[b]]) == s) {
-            done[b] = 1;
-            copies.push_back(list[b]);
-          }
-        if (copies.size() < 2) continue;
-        auto parity = [&](std::size_t i) {  // +1 when the cycle is (s0 s1 s2), -1 when reversed
-          const Tri& t = tris[i];
-          const int r0 = int(std::find(t.begin(), t.end(), s[0]) - t.begin());
-          return t[(r0 + 1) % 3] == s[1] ? 1 : -1;
-        };
-        int net = 0;
-        for (std::size_t i : copies) net += parity(i);
-        bool kept = false;
-        for (std::size_t i : copies) {
-          if (net != 0 && !kept && parity(i) == (net > 0 ? 1 : -1)) {
-            kept = true;
-            continue;
-          }
-          keep[i] = 0;
+    std::vector<std::size_t> copies;
+    for (const auto& [first, start] : runs) {
+      const Tri& s = by_set[start].first;
+      copies.clear();
+      for (std::size_t k = start; k < by_set.size() && by_set[k].first == s; ++k) copies.push_back(by_set[k].second);
+      auto parity = [&](std::size_t i) {  // +1 when the cycle is (s0 s1 s2), -1 when reversed
+        const Tri& t = tris[i];
+        const int r0 = int(std::find(t.begin(), t.end(), s[0]) - t.begin());
+        return t[(r0 + 1) % 3] == s[1] ? 1 : -1;
+      };
+      int net = 0;
+      for (std::size_t i : copies) net += parity(i);
+      bool kept = false;
+      for (std::size_t i : copies) {
+        if (net != 0 && !kept && parity(i) == (net > 0 ? 1 : -1)) {
+          kept = true;
+          continue;
         }
-        const std::size_t removed = copies.size() - (net != 0 ? 1 : 0);
-        const std::size_t cancelled = copies.size() - std::size_t(std::abs(net));
-        r.cancelled_faces += cancelled;
-        r.duplicate_faces_dropped += removed - cancelled;
-        if (net == 0) {
-          const auto plus = std::find_if(copies.begin(), copies.end(), [&](std::size_t i) { return parity(i) > 0; });
-          const auto minus = std::find_if(copies.begin(), copies.end(), [&](std::size_t i) { return parity(i) < 0; });
-          cancelled_groups.push_back({*plus, *minus, copies.size()});
-        }
+        keep[i] = 0;
+      }
+      const std::size_t removed = copies.size() - (net != 0 ? 1 : 0);
+      const std::size_t cancelled = copies.size() - std::size_t(std::abs(net));
+      r.cancelled_faces += cancelled;
+      r.duplicate_faces_dropped += removed - cancelled;
+      if (net == 0) {
+        const auto plus = std::find_if(copies.begin(), copies.end(), [&](std::size_t i) { return parity(i) > 0; });
+        const auto minus = std::find_if(copies.begin(), copies.end(), [&](std::size_t i) { return parity(i) < 0; });
+        cancelled_groups.push_back({*plus, *minus, copies.size()});
       }
     }
     r.opposite_copies_kept = keep_needed_copies(tris, cancelled_groups, keep);
@@ -347,18 +346,28 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
     const std::size_t points_before = pts.size();
     PMP::orient_polygon_soup(pts, polys);
     r.split_vertices = pts.size() - points_before;
-    std::unordered_map<std::uint64_t, std::vector<std::size_t>> uses;
+    // Faces joined across edges used twice, by sorting every (edge, face).
+    std::vector<std::pair<std::uint64_t, std::size_t>> uses(3 * polys.size());
     for (std::size_t f = 0; f < polys.size(); ++f)
-      for (int k = 0; k < 3; ++k) uses[undirected_edge_key(Index(polys[f][k]), Index(polys[f][(k + 1) % 3]))].push_back(f);
+      for (int k = 0; k < 3; ++k)
+        uses[3 * f + k] = {undirected_edge_key(Index(polys[f][k]), Index(polys[f][(k + 1) % 3])), f};
+    std::sort(uses.begin(), uses.end());
     UnionFind uf(polys.size());
     std::vector<char> open_component_face(polys.size(), 0);
-    for (const auto& [e, u] : uses) {
-      if (u.size() == 2) uf.unite(u[0], u[1]);
-      if (u.size() == 1) open_component_face[u[0]] = 1;
+    for (std::size_t a = 0, b; a < uses.size(); a = b) {
+      for (b = a + 1; b < uses.size() && uses[b].first == uses[a].first;) ++b;
+      if (b - a == 2) uf.unite(uses[a].second, uses[a + 1].second);
+      if (b - a == 1) open_component_face[uses[a].second] = 1;
     }
-    std::unordered_map<std::size_t, std::vector<std::size_t>> components;
-    for (std::size_t f = 0; f < polys.size(); ++f) components[uf.find(f)].push_back(f);
-    for (auto& [root, faces] : components) {
+    // each component's faces, in face order
+    std::vector<std::pair<std::size_t, std::size_t>> by_component(polys.size());  // (root, face)
+    for (std::size_t f = 0; f < polys.size(); ++f) by_component[f] = {uf.find(f), f};
+    std::sort(by_component.begin(), by_component.end());
+    std::vector<std::size_t> faces;
+    for (std::size_t a = 0, b; a < by_component.size(); a = b) {
+      faces.clear();
+      for (b = a; b < by_component.size() && by_component[b].first == by_component[a].first; ++b)
+        faces.push_back(by_component[b].second);
       std::size_t agree = 0;
       bool open = false;
       for (std::size_t f : faces) {
