@@ -321,13 +321,15 @@ TEST_CASE("repair --for tetgen: two parts touching within 1e-10 are pushed apart
 
 TEST_CASE("assess: provenance matches polygons corner for corner, in either orientation and from any corner",
           "[pipeline]") {
-  // A cube of six quads; the output has them rotated and reversed, and one
-  // quad with its corners in another cyclic order (a different face).
+  // A cube of six quads (and a copy of one); the output has them rotated and
+  // reversed, and one quad with its corners in another cyclic order (a
+  // different face).
   Soup in;
   in.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
   const std::vector<std::vector<Index>> quads = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
                                                  {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
   for (const auto& q : quads) in.add_face(q.begin(), q.end());
+  in.add_face(quads[0].rbegin(), quads[0].rend());  // a reversed copy of face 0: face 0 is still the one named
   Soup out;
   out.points = in.points;
   for (std::size_t f = 0; f < 5; ++f) {

@@ -8,7 +8,6 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
-#include <unordered_map>
 #include <limits>
 
 #include "polyheal/inspect/nesting.h"
@@ -739,33 +738,39 @@ double face_area(const Soup& s, std::size_t f) {
 /// Key of a face by its corner positions in cyclic order, independent of
 /// the starting corner and of orientation (provenance: "the same face"):
 /// the smallest of its rotations, read either way round.
+using Corners = std::vector<Point3d>;
 struct CornerKey {
-  std::vector<Point3d> p;
+  Corners p;
+  bool operator<(const CornerKey& o) const { return p < o.p; }
   bool operator==(const CornerKey& o) const { return p == o.p; }
 };
-struct CornerKeyHash {
-  std::size_t operator()(const CornerKey& k) const {
-    std::size_t h = 0;
-    for (const Point3d& q : k.p)
-      for (double x : q) h = h * 1000003u ^ std::hash<double>()(x);
-    return h;
-  }
-};
-CornerKey corner_key(const std::vector<Point3d>& corners) {
+CornerKey corner_key(const Corners& corners) {
   const std::size_t n = corners.size();
   const Point3d& least = *std::min_element(corners.begin(), corners.end());
-  CornerKey best;
+  // corner k of the reading starting at r, forwards (way 0) or backwards
+  auto at = [&](int way, std::size_t r, std::size_t k) -> const Point3d& {
+    return corners[way ? (r + n - k) % n : (r + k) % n];
+  };
+  int best_way = -1;
+  std::size_t best_r = 0;
   for (int way = 0; way < 2; ++way)
     for (std::size_t r = 0; r < n; ++r) {
       if (corners[r] != least) continue;  // the smallest rotation starts at a smallest corner
-      std::vector<Point3d> c(n);
-      for (std::size_t k = 0; k < n; ++k) c[k] = corners[way ? (r + n - k) % n : (r + k) % n];
-      if (best.p.empty() || c < best.p) best.p = std::move(c);
+      bool smaller = best_way < 0;
+      for (std::size_t k = 0; k < n && !smaller; ++k) {
+        if (at(way, r, k) != at(best_way, best_r, k)) {
+          smaller = at(way, r, k) < at(best_way, best_r, k);
+          break;
+        }
+      }
+      if (smaller) best_way = way, best_r = r;
     }
-  return best;
+  CornerKey key;
+  for (std::size_t k = 0; k < n; ++k) key.p.push_back(at(best_way, best_r, k));
+  return key;
 }
 CornerKey corner_key(const Soup& s, std::size_t f) {
-  std::vector<Point3d> corners;
+  Corners corners;
   for (Index i : s.face(f)) corners.push_back(s.points[i]);
   return corner_key(corners);
 }
@@ -940,17 +945,24 @@ Assessment assess(const Soup& input, const Report& in, const Soup& written, doub
   }
   a.within_deviation = a.deviation >= 0 ? a.deviation <= max_deviation : written.face_count() == input.face_count();
   // Provenance: an output face whose corners are exactly an input face's.
-  std::unordered_map<CornerKey, std::int64_t, CornerKeyHash> by_corners;
+  // Input faces sorted by key, then by index (of copies, the first), and
+  // looked up by binary search: a node-based hash map of a million keys
+  // hashed from doubles was a third of a 1M-face scan's repair (16.3 s ->
+  // 9.4 s with the clean stage's sorts).
+  std::vector<std::pair<CornerKey, std::int64_t>> by_corners(input.face_count());
   for (std::size_t f = 0; f < input.face_count(); ++f) {
     a.area_in += face_area(input, f);
-    by_corners.emplace(corner_key(input, f), std::int64_t(f));
+    by_corners[f] = {corner_key(input, f), std::int64_t(f)};
   }
+  std::sort(by_corners.begin(), by_corners.end());
   a.provenance.assign(written.face_count(), -1);
   for (std::size_t f = 0; f < written.face_count(); ++f) {
     const double area = face_area(written, f);
     a.area_out += area;
-    auto it = by_corners.find(corner_key(written, f));
-    if (it == by_corners.end()) continue;
+    const CornerKey key = corner_key(written, f);
+    const auto it = std::lower_bound(by_corners.begin(), by_corners.end(), key,
+                                     [](const std::pair<CornerKey, std::int64_t>& e, const CornerKey& k) { return e.first < k; });
+    if (it == by_corners.end() || !(it->first == key)) continue;
     a.provenance[f] = it->second;
     ++a.faces_kept;
     a.area_kept += area;
