@@ -3,6 +3,10 @@
 // surface bounds a volume — and that a hole or the solid itself never is.
 #include <catch2/catch.hpp>
 
+#include <random>
+
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+
 #include "polyheal/mesh/topology.h"
 #include "support/builders.h"
 
@@ -57,4 +61,31 @@ TEST_CASE("sheets_to_leave_out: a hole stays a hole, with or without a fin besid
   r = sheets_to_leave_out(box_with(2, true), true);
   CHECK(r.faces == std::vector<std::size_t>{11});
   CHECK(r.imbalance == 3);
+}
+
+TEST_CASE("is_polygon_mesh: decides as CGAL's is_polygon_soup_a_polygon_mesh on random small soups", "[mesh]") {
+  // Triangles on a handful of vertices, random orientations: pinched
+  // vertices, edges used three times or twice one way, repeated indices and
+  // closed or open fans all come up.
+  std::mt19937 rng(23);
+  std::size_t meshes = 0, others = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    const int n = 4 + int(rng() % 4), faces = 1 + int(rng() % 7);
+    std::vector<std::vector<std::size_t>> polys;
+    Soup soup;
+    soup.points.resize(std::size_t(n));
+    for (int f = 0; f < faces; ++f) {
+      std::vector<std::size_t> p{rng() % n, rng() % n, rng() % n};
+      if (trial % 3 && (p[0] == p[1] || p[1] == p[2] || p[0] == p[2])) continue;  // mostly proper triangles
+      polys.push_back(p);
+      soup.add_triangle(Index(p[0]), Index(p[1]), Index(p[2]));
+    }
+    if (polys.empty()) continue;
+    const bool want = CGAL::Polygon_mesh_processing::is_polygon_soup_a_polygon_mesh(polys);
+    INFO("trial " << trial);
+    CHECK(is_polygon_mesh(analyze_topology(soup)) == want);
+    ++(want ? meshes : others);
+  }
+  CHECK(meshes > 300);
+  CHECK(others > 300);
 }

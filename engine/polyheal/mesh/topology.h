@@ -49,6 +49,17 @@ struct Topology {
 /// Analyses `soup` (indices as given: weld first for positional sharing).
 Topology analyze_topology(const Soup& soup);
 
+/// Whether a halfedge mesh can be built from the soup the topology is of,
+/// faces as they are (for faces of three corners or more, what CGAL's
+/// PMP::is_polygon_soup_a_polygon_mesh decides — with an ordered set of
+/// directed edges and one per vertex, 1.2 s on a 1M-face scan): no face
+/// repeats an index, every edge is used once or twice in opposite
+/// directions, and the faces round each vertex form one fan.
+inline bool is_polygon_mesh(const Topology& t) {
+  return t.repeated_index_faces.empty() && t.nonmanifold_edges.empty() && t.misoriented_edges.empty() &&
+         t.nonmanifold_vertices.empty();
+}
+
 /// The key of the edge {a, b}, either way round: (min << 32) | max.
 inline std::uint64_t undirected_edge_key(Index a, Index b) {
   return a < b ? (std::uint64_t(a) << 32) | b : (std::uint64_t(b) << 32) | a;
