@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <random>
 
 #include <tbb/global_control.h>
@@ -333,6 +334,34 @@ TEST_CASE("distance: nearest-triangle and box queries agree with a search of eve
     }
   }
 
+}
+
+TEST_CASE("distance: an index large enough to be built in parallel answers as a search of every triangle does, "
+          "and as one built by one thread",
+          "[repair][distance]") {
+  // 81920 triangles: the index's top levels are built in parallel, each
+  // half into the node ids it would take in one thread's pre-order.
+  const Soup s = test::icosphere(1.0, 6);
+  REQUIRE(s.face_count() == 81920);
+  const detail::SurfaceDistance parallel(s);
+  std::optional<detail::SurfaceDistance> serial;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    serial.emplace(s);
+  }
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> u(-1.3, 1.3);
+  auto corner = [&](std::size_t f, int k) { return s.points[s.face(f)[k]]; };
+  for (int k = 0; k < 2000; ++k) {
+    const Point3d p{u(rng), u(rng), u(rng)};
+    const auto got = parallel.nearest(p);
+    CHECK(got == serial->nearest(p));
+    if (k % 10) continue;
+    double want = std::numeric_limits<double>::infinity();
+    for (std::size_t f = 0; f < s.face_count(); ++f)
+      want = std::min(want, detail::squared_distance_to_triangle(p, corner(f, 0), corner(f, 1), corner(f, 2)));
+    CHECK(std::abs(got.first - want) <= 1e-12 * (1 + want));
+  }
 }
 
 TEST_CASE("distance: a wall removed inside a union counts as removed, not as moved", "[repair][distance]") {

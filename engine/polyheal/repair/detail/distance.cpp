@@ -17,6 +17,7 @@
 #include <tuple>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <numeric>
@@ -46,6 +47,7 @@ Corners canonical(const Point3d& a, const Point3d& b, const Point3d& c) {
 
 std::vector<Corners> triangles_of(const Soup& soup) {
   std::vector<Corners> out;
+  out.reserve(soup.indices.size() / 3);
   for (std::size_t f = 0; f < soup.face_count(); ++f) {
     const FaceView face = soup.face(f);
     for (std::size_t k = 1; k + 1 < face.size(); ++k)
@@ -422,8 +424,10 @@ class Bvh {
     cut_.assign(triangles.size(), 0);
     for (std::size_t i = 1; i < entries_.size(); ++i)  // a triangle's pieces are added side by side
       if (entries_[i].triangle == entries_[i - 1].triangle) cut_[entries_[i].triangle] = 1;
-    nodes_.reserve(entries_.size() / 2 + 1);
-    build(0, static_cast<std::uint32_t>(entries_.size()));
+    const auto n = static_cast<std::uint32_t>(entries_.size());
+    std::map<std::uint32_t, std::uint32_t> counted;
+    nodes_.resize(node_count(n, counted));
+    build(0, n, 0, counted);
   }
 
   /// The nearest triangle to p and its squared distance, given a known
@@ -492,6 +496,7 @@ class Bvh {
  private:
   static constexpr double kSplit = 4;  // pieces no longer than 4x the median longest edge...
   static constexpr int kDepth = 6;     // ... or 64 pieces a triangle
+  static constexpr std::uint32_t kParallelBuild = 1u << 14;  // entries: below, one thread builds the subtree
   struct Entry {
     Box box;
     std::uint32_t triangle;
@@ -578,7 +583,22 @@ class Bvh {
   }
   /// Node over entries [lo, hi): split at the median of the box centres
   /// along the axis where they spread most; leaves of up to four.
-  std::uint32_t build(std::uint32_t lo, std::uint32_t hi) {
+  /// The nodes build() makes for n entries (memoized in `counted`: the
+  /// halves of a range have at most two sizes a level).
+  static std::uint32_t node_count(std::uint32_t n, std::map<std::uint32_t, std::uint32_t>& counted) {
+    if (n <= 4) return 1;
+    if (const auto it = counted.find(n); it != counted.end()) return it->second;
+    const std::uint32_t c = 1 + node_count(n / 2, counted) + node_count(n - n / 2, counted);
+    counted.emplace(n, c);
+    return c;
+  }
+
+  /// Builds the subtree of entries [lo, hi) as node `id` and the nodes
+  /// after it, in pre-order (left subtree first); returns how many it made.
+  /// Large ranges build their halves in parallel, each into the node ids
+  /// it takes in that order: the same tree as one thread builds.
+  std::uint32_t build(std::uint32_t lo, std::uint32_t hi, std::uint32_t id,
+                      const std::map<std::uint32_t, std::uint32_t>& counted) {
     Box box = entries_[lo].box, centres;
     for (int k = 0; k < 3; ++k) {
       centres.lo[k] = std::numeric_limits<double>::infinity();
@@ -593,13 +613,12 @@ class Bvh {
         centres.lo[k] = std::min(centres.lo[k], c);
         centres.hi[k] = std::max(centres.hi[k], c);
       }
-    const auto id = static_cast<std::uint32_t>(nodes_.size());
-    nodes_.push_back({box, 0, 0, false});
+    nodes_[id] = {box, 0, 0, false};
     if (hi - lo <= 4) {
       nodes_[id].leaf = true;
       nodes_[id].a = lo;
       nodes_[id].b = hi - lo;
-      return id;
+      return 1;
     }
     int axis = 0;
     for (int k = 1; k < 3; ++k)
@@ -609,10 +628,19 @@ class Bvh {
                      [axis](const Entry& x, const Entry& y) {
                        return x.box.lo[axis] + x.box.hi[axis] < y.box.lo[axis] + y.box.hi[axis];
                      });
-    const std::uint32_t left = build(lo, mid), right = build(mid, hi);
+    const std::uint32_t left = id + 1;
+    std::uint32_t left_count = 0, right_count = 0;
+    if (hi - lo >= kParallelBuild) {
+      const std::uint32_t right = left + counted.at(mid - lo);
+      tbb::parallel_invoke([&] { left_count = build(lo, mid, left, counted); },
+                           [&] { right_count = build(mid, hi, right, counted); });
+    } else {
+      left_count = build(lo, mid, left, counted);
+      right_count = build(mid, hi, left + left_count, counted);
+    }
     nodes_[id].a = left;
-    nodes_[id].b = right;
-    return id;
+    nodes_[id].b = left + left_count;
+    return 1 + left_count + right_count;
   }
 
   const Triangles& triangles_;
@@ -641,10 +669,15 @@ SurfaceDistance::SurfaceDistance(const Soup& soup) : SurfaceDistance(triangles_o
 
 SurfaceDistance::SurfaceDistance(const std::vector<std::array<Point3d, 3>>& triangles)
     : impl_(std::make_unique<Impl>()) {
-  for (const auto& t : triangles) {
-    impl_->triangles.emplace_back(point(t[0]), point(t[1]), point(t[2]));
-    impl_->degenerate.push_back(impl_->triangles.back().is_degenerate());
-  }
+  impl_->triangles.resize(triangles.size());
+  impl_->degenerate.resize(triangles.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const auto& t = triangles[i];
+      impl_->triangles[i] = K::Triangle_3(point(t[0]), point(t[1]), point(t[2]));
+      impl_->degenerate[i] = impl_->triangles[i].is_degenerate();
+    }
+  });
   impl_->bvh = std::make_unique<Bvh>(impl_->triangles, impl_->degenerate);
 }
 
