@@ -324,10 +324,6 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
     }
   }
 
-  // A caller that wants only a closed 2-manifold stops here when the faces,
-  // whatever their orientation, cannot make one (orientation changes no
-  // edge's use count; orient_polygon_soup, costly on large non-manifold
-  // soups, would only split more).
   // The topology of the faces as they stand (by index alone), computed
   // when first asked and again after orientation changes them.
   std::optional<Topology> topo;
@@ -340,6 +336,11 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
     }
     return *topo;
   };
+
+  // A caller that wants only a closed 2-manifold stops here when the faces,
+  // whatever their orientation, cannot make one (orientation changes no
+  // edge's use count; orient_polygon_soup, costly on large non-manifold
+  // soups, would only split more).
   if (o.only_if_closed) {
     const Topology& t = topology();
     if (tris.empty() || !t.boundary_edges.empty() || !t.nonmanifold_edges.empty() || !t.nonmanifold_vertices.empty())

@@ -581,8 +581,6 @@ class Bvh {
       add(t, mid(c, a), b, c, limit2, depth + 1);
     }
   }
-  /// Node over entries [lo, hi): split at the median of the box centres
-  /// along the axis where they spread most; leaves of up to four.
   /// The nodes build() makes for n entries (memoized in `counted`: the
   /// halves of a range have at most two sizes a level).
   static std::uint32_t node_count(std::uint32_t n, std::map<std::uint32_t, std::uint32_t>& counted) {
@@ -593,8 +591,10 @@ class Bvh {
     return c;
   }
 
-  /// Builds the subtree of entries [lo, hi) as node `id` and the nodes
-  /// after it, in pre-order (left subtree first); returns how many it made.
+  /// Node over entries [lo, hi): split at the median of the box centres
+  /// along the axis where they spread most; leaves of up to four. Built as
+  /// node `id` and the nodes after it, in pre-order (left subtree first);
+  /// returns how many it made.
   /// Large ranges build their halves in parallel, each into the node ids
   /// it takes in that order: the same tree as one thread builds.
   std::uint32_t build(std::uint32_t lo, std::uint32_t hi, std::uint32_t id,
