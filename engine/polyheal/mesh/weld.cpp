@@ -34,36 +34,44 @@ PointKey key_of(const Point3d& p) {
   return k;
 }
 
+constexpr Index kEmpty = ~Index(0);
+
+/// Open addressing with linear probing over point indices: a flat table of
+/// a power of two slots, at least twice `n`, kEmpty where free (no node
+/// allocation).
+std::vector<Index> empty_table(std::size_t n) {
+  std::size_t capacity = 16;
+  while (capacity < 2 * n) capacity *= 2;
+  return std::vector<Index>(capacity, kEmpty);
+}
+
+/// The slot, from `hash` on, whose entry `holds(slot)` says is the one
+/// sought, or the free slot where it would go.
+template <class Holds>
+std::size_t probe(const std::vector<Index>& table, std::uint64_t hash, Holds holds) {
+  const std::size_t mask = table.size() - 1;
+  std::size_t slot = static_cast<std::size_t>(hash) & mask;
+  while (table[slot] != kEmpty && !holds(slot)) slot = (slot + 1) & mask;
+  return slot;
+}
+
 }  // namespace
 
 Weld weld_identical_points(const std::vector<Point3d>& points) {
   Weld w;
   w.representative.resize(points.size());
-  // Open addressing (linear probing) over point indices: a flat table twice
-  // the point count, no node allocation.
-  std::size_t capacity = 16;
-  while (capacity < 2 * points.size()) capacity *= 2;
-  const std::size_t mask = capacity - 1;
-  constexpr Index kEmpty = ~Index(0);
-  std::vector<Index> table(capacity, kEmpty);
+  std::vector<Index> table = empty_table(points.size());  // first point of each value
   std::vector<PointKey> keys(points.size());
   const PointKeyHash hash;
   for (std::size_t i = 0; i < points.size(); ++i) {
     keys[i] = key_of(points[i]);
-    std::size_t slot = hash(keys[i]) & mask;
-    for (;;) {
-      const Index j = table[slot];
-      if (j == kEmpty) {
-        table[slot] = static_cast<Index>(i);
-        w.representative[i] = static_cast<Index>(i);
-        break;
-      }
-      if (keys[j] == keys[i]) {
-        w.representative[i] = j;
-        ++w.merged;
-        break;
-      }
-      slot = (slot + 1) & mask;
+    const std::size_t slot = probe(table, hash(keys[i]), [&](std::size_t s) { return keys[table[s]] == keys[i]; });
+    if (table[slot] == kEmpty) {
+      table[slot] = static_cast<Index>(i);
+      w.representative[i] = static_cast<Index>(i);
+    } else {
+      w.representative[i] = table[slot];
+      ++w.merged;
     }
   }
   return w;
@@ -82,24 +90,17 @@ std::vector<Index> weld_near_points(const std::vector<Point3d>& pts, const std::
   auto key = [](std::int64_t i, std::int64_t j, std::int64_t k) {
     return (std::uint64_t(i & 0x1FFFFF) << 42) | (std::uint64_t(j & 0x1FFFFF) << 21) | std::uint64_t(k & 0x1FFFFF);
   };
-  // The grid's occupied cells in a flat table (open addressing, linear
-  // probing), each the head of a list of its points through `next`: with
-  // d far below the point spacing nearly every point has a cell of its
-  // own, and a node-based map allocated one list per point (1.2 s of a
-  // 1M-face scan's repair).
-  std::size_t capacity = 16;
-  while (capacity < 2 * pts.size()) capacity *= 2;
-  const std::size_t mask = capacity - 1;
-  constexpr Index kNone = ~Index(0);
-  std::vector<std::uint64_t> cell_key(capacity);
-  std::vector<Index> head(capacity, kNone), next(pts.size(), kNone);
-  auto slot_of = [&](std::uint64_t k) {  // k's slot, or the empty one where it would go
+  // The grid's occupied cells in a flat table, each the head of a list of
+  // its points through `next`: with d far below the point spacing nearly
+  // every point has a cell of its own, and a node-based map allocated one
+  // list per point (1.2 s of a 1M-face scan's repair).
+  std::vector<Index> head = empty_table(pts.size()), next(pts.size(), kEmpty);
+  std::vector<std::uint64_t> cell_key(head.size());
+  auto slot_of = [&](std::uint64_t k) {  // k's slot, or the free one where it would go
     std::uint64_t h = k;  // splitmix64's finalizer: the keys' bits are fields
     h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ull;
     h = (h ^ (h >> 27)) * 0x94D049BB133111EBull;
-    std::size_t slot = static_cast<std::size_t>(h ^ (h >> 31)) & mask;
-    while (head[slot] != kNone && cell_key[slot] != k) slot = (slot + 1) & mask;
-    return slot;
+    return probe(head, h ^ (h >> 31), [&](std::size_t s) { return cell_key[s] == k; });
   };
   for (Index v = 0; v < pts.size(); ++v) {
     if (identical[v] != v) continue;
@@ -107,7 +108,7 @@ std::vector<Index> weld_near_points(const std::vector<Point3d>& pts, const std::
     for (std::int64_t i = ci - 1; i <= ci + 1; ++i)
       for (std::int64_t j = cj - 1; j <= cj + 1; ++j)
         for (std::int64_t k = ck - 1; k <= ck + 1; ++k)
-          for (Index w = head[slot_of(key(i, j, k))]; w != kNone; w = next[w]) {
+          for (Index w = head[slot_of(key(i, j, k))]; w != kEmpty; w = next[w]) {
             double s = 0;
             for (int c = 0; c < 3; ++c) s += (pts[v][c] - pts[w][c]) * (pts[v][c] - pts[w][c]);
             if (s <= d * d) uf.unite(v, w);

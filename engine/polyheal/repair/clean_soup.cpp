@@ -60,6 +60,16 @@ bool same_cycle(const std::vector<P3>& pts, const std::vector<std::size_t>& p, c
   return false;
 }
 
+/// Calls f(a, b) for each run [a, b) of sorted `v` whose elements have
+/// equal `.first` (pairs sorted by key: the groups the node maps were).
+template <class V, class F>
+void for_each_run(const V& v, F f) {
+  for (std::size_t a = 0, b; a < v.size(); a = b) {
+    for (b = a + 1; b < v.size() && v[b].first == v[a].first;) ++b;
+    f(a, b);
+  }
+}
+
 /// A group of copies of one triangle whose orientations cancel: a copy of
 /// each orientation, and the group's size.
 struct CancelledGroup {
@@ -143,14 +153,13 @@ std::size_t split_t_junctions(const std::vector<Point3d>& pts, std::vector<Tri>&
     std::sort(sides.begin(), sides.end());
     std::vector<std::pair<std::size_t, int>> border;  // (face, corner): edge corner -> corner+1
     std::vector<Index> border_vertices;
-    for (std::size_t a = 0, b; a < sides.size(); a = b) {
-      for (b = a + 1; b < sides.size() && sides[b].first == sides[a].first;) ++b;
-      if (b - a != 1) continue;
+    for_each_run(sides, [&](std::size_t a, std::size_t b) {
+      if (b - a != 1) return;
       const std::uint64_t e = sides[a].first;
       border.push_back({sides[a].second / 3, int(sides[a].second % 3)});
       border_vertices.push_back(Index(e >> 32));
       border_vertices.push_back(Index(e & 0xFFFFFFFFu));
-    }
+    });
     if (border.empty()) break;
     std::sort(border.begin(), border.end());
     std::sort(border_vertices.begin(), border_vertices.end());
@@ -248,19 +257,18 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
     std::vector<std::pair<Tri, std::size_t>> by_set(tris.size());
     for (std::size_t i = 0; i < tris.size(); ++i) by_set[i] = {sorted(tris[i]), i};
     std::sort(by_set.begin(), by_set.end());
-    std::vector<std::pair<std::size_t, std::size_t>> runs;  // (first face, start in by_set) of each group of copies
-    for (std::size_t a = 0, b; a < by_set.size(); a = b) {
-      for (b = a + 1; b < by_set.size() && by_set[b].first == by_set[a].first;) ++b;
-      if (b - a >= 2) runs.push_back({by_set[a].second, a});
-    }
+    std::vector<std::array<std::size_t, 3>> runs;  // (first face, [a, b) in by_set) of each group of copies
+    for_each_run(by_set, [&](std::size_t a, std::size_t b) {
+      if (b - a >= 2) runs.push_back({by_set[a].second, a, b});
+    });
     std::sort(runs.begin(), runs.end());
     std::vector<char> keep(tris.size(), 1);
     std::vector<CancelledGroup> cancelled_groups;
     std::vector<std::size_t> copies;
-    for (const auto& [first, start] : runs) {
-      const Tri& s = by_set[start].first;
+    for (const auto& [first, a, b] : runs) {
+      const Tri& s = by_set[a].first;
       copies.clear();
-      for (std::size_t k = start; k < by_set.size() && by_set[k].first == s; ++k) copies.push_back(by_set[k].second);
+      for (std::size_t k = a; k < b; ++k) copies.push_back(by_set[k].second);
       auto parity = [&](std::size_t i) {  // +1 when the cycle is (s0 s1 s2), -1 when reversed
         const Tri& t = tris[i];
         const int r0 = int(std::find(t.begin(), t.end(), s[0]) - t.begin());
@@ -368,20 +376,18 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
     std::sort(uses.begin(), uses.end());
     UnionFind uf(polys.size());
     std::vector<char> open_component_face(polys.size(), 0);
-    for (std::size_t a = 0, b; a < uses.size(); a = b) {
-      for (b = a + 1; b < uses.size() && uses[b].first == uses[a].first;) ++b;
+    for_each_run(uses, [&](std::size_t a, std::size_t b) {
       if (b - a == 2) uf.unite(uses[a].second, uses[a + 1].second);
       if (b - a == 1) open_component_face[uses[a].second] = 1;
-    }
+    });
     // each component's faces, in face order
     std::vector<std::pair<std::size_t, std::size_t>> by_component(polys.size());  // (root, face)
     for (std::size_t f = 0; f < polys.size(); ++f) by_component[f] = {uf.find(f), f};
     std::sort(by_component.begin(), by_component.end());
     std::vector<std::size_t> faces;
-    for (std::size_t a = 0, b; a < by_component.size(); a = b) {
+    for_each_run(by_component, [&](std::size_t a, std::size_t b) {
       faces.clear();
-      for (b = a; b < by_component.size() && by_component[b].first == by_component[a].first; ++b)
-        faces.push_back(by_component[b].second);
+      for (std::size_t k = a; k < b; ++k) faces.push_back(by_component[k].second);
       std::size_t agree = 0;
       bool open = false;
       for (std::size_t f : faces) {
@@ -395,7 +401,7 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
       if (flip)
         for (std::size_t f : faces) std::reverse(polys[f].begin(), polys[f].end());
       for (std::size_t f : faces) r.reoriented_faces += !same_cycle(pts, polys[f], tris[f]);
-    }
+    });
   }
 
   // Stitch and fill, on a halfedge mesh.
