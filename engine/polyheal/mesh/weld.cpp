@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "polyheal/mesh/hash.h"
 #include "polyheal/mesh/union_find.h"
 
 namespace polyheal {
@@ -34,26 +35,7 @@ PointKey key_of(const Point3d& p) {
   return k;
 }
 
-constexpr Index kEmpty = ~Index(0);
-
-/// Open addressing with linear probing over point indices: a flat table of
-/// a power of two slots, at least twice `n`, kEmpty where free (no node
-/// allocation).
-std::vector<Index> empty_table(std::size_t n) {
-  std::size_t capacity = 16;
-  while (capacity < 2 * n) capacity *= 2;
-  return std::vector<Index>(capacity, kEmpty);
-}
-
-/// The slot, from `hash` on, whose entry `holds(slot)` says is the one
-/// sought, or the free slot where it would go.
-template <class Holds>
-std::size_t probe(const std::vector<Index>& table, std::uint64_t hash, Holds holds) {
-  const std::size_t mask = table.size() - 1;
-  std::size_t slot = static_cast<std::size_t>(hash) & mask;
-  while (table[slot] != kEmpty && !holds(slot)) slot = (slot + 1) & mask;
-  return slot;
-}
+constexpr Index kEmpty = kEmptySlot;
 
 }  // namespace
 

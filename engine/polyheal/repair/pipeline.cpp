@@ -14,6 +14,7 @@
 #include "polyheal/inspect/nesting.h"
 #include "polyheal/inspect/predicates.h"
 #include "polyheal/mesh/errors.h"
+#include "polyheal/mesh/hash.h"
 #include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/weld.h"
 #include "polyheal/repair/clean_soup.h"
@@ -771,18 +772,7 @@ CornerKey corner_key(const Corners& corners) {
 }
 /// A hash of the key consistent with its equality (-0.0 == 0.0: both
 /// hashed as +0.0; readers reject NaN).
-std::uint64_t hash_of(const CornerKey& k) {
-  std::uint64_t h = 0x9E3779B97F4A7C15ull;
-  for (const Point3d& q : k.p)
-    for (double x : q) {
-      const double v = x + 0.0;
-      std::uint64_t b;
-      std::memcpy(&b, &v, sizeof b);
-      h = (h ^ b) * 0xBF58476D1CE4E5B9ull;
-      h ^= h >> 31;
-    }
-  return h;
-}
+std::uint64_t hash_of(const CornerKey& k) { return hash_points(k.p.data(), k.p.size()); }
 CornerKey corner_key(const Soup& s, std::size_t f) {
   Corners corners;
   for (Index i : s.face(f)) corners.push_back(s.points[i]);
