@@ -250,6 +250,61 @@ TEST_CASE("distance: Hausdorff between fan and coarse tessellations of a plate s
   CHECK(filled[1] <= 0.5 + 1e-12);
 }
 
+TEST_CASE("distance: a triangle added at a corner of the input is measured against input beside it, not only "
+          "input its box meets",
+          "[repair][distance]") {
+  // The input: a triangle in z = 0 with a corner at the origin, a wall at
+  // x = 0.3 (its box does not meet the added triangle's, at x = 0), and 60
+  // small triangles far away (so the measure indexes only the input the
+  // added triangle can reach: within its longest edge of it). The added
+  // triangle rises from the origin to z = 2 along x = 0: every point of it
+  // is within 0.3 of the wall, and its top 2 from the first triangle. Measured
+  // against the input near its own box only, the wall would be missed (2).
+  Soup input = test::soup({{0, 0, 0}, {-1, 0, 0}, {0, -1, 0}, {0.3, -5, -1}, {0.3, 5, -1}, {0.3, 0, 5}},
+                          {{0, 1, 2}, {3, 4, 5}});
+  for (int i = 0; i < 60; ++i) {
+    const Index b = static_cast<Index>(input.points.size());
+    const double x = 100 + i;
+    input.points.push_back({x, 0, 0});
+    input.points.push_back({x + 0.5, 0, 0});
+    input.points.push_back({x, 0.5, 0});
+    input.add_triangle(b, b + 1, b + 2);
+  }
+  const double error = 1e-4;
+  for (const Point3d& origin : {Point3d{0, 0, 0}, Point3d{1e-9, 0, 0}}) {  // on the input; not on it (all indexed)
+    Soup output = input;
+    const Index b = static_cast<Index>(output.points.size());
+    output.points.push_back(origin);
+    output.points.push_back({0, 0, 2});
+    output.points.push_back({0, 0.2, 2});
+    output.add_triangle(b, b + 1, b + 2);
+    const std::array<double, 2> d = detail::one_sided_distances(input, output, error);
+    INFO("added triangle from (" << origin[0] << ", 0, 0): " << d[1]);
+    CHECK(d[0] <= 1e-12);  // the input is all in the output
+    CHECK(d[1] >= 0.3 - error - 1e-9);
+    CHECK(d[1] <= 0.3 + 1e-9);
+    CHECK(detail::one_sided_distance(output, input, error) == d[1]);
+  }
+}
+
+TEST_CASE("distance: faces in both soups count once per copy", "[repair][distance]") {
+  // A face twice in one soup and once in the other: the copy left over is
+  // at distance 0 (the same face is in the other soup); a face only in one
+  // soup is measured.
+  const Soup one = test::soup({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{0, 1, 2}});
+  Soup two = one;
+  two.add_triangle(0, 1, 2);
+  two.add_triangle(2, 1, 0);  // the same face, turned: the same triangle for distances
+  std::array<double, 2> d = detail::one_sided_distances(one, two, 1e-6);
+  CHECK(d[0] == 0.0);
+  CHECK(d[1] == 0.0);
+  two.add_triangle(0, 1, 3);  // standing on the first face's edge: its apex is 1 from it
+  d = detail::one_sided_distances(one, two, 1e-6);
+  CHECK(d[0] == 0.0);
+  CHECK(d[1] >= 1.0 - 1e-6);
+  CHECK(d[1] <= 1.0 + 1e-12);
+}
+
 TEST_CASE("distance: Hausdorff of a removed interior finds its deepest point", "[repair][distance]") {
   // A sphere of radius 1 with a second one of radius 0.5 inside it, against
   // the outer sphere alone: what a union leaves out, 0.5 deep. One vertex

@@ -1,5 +1,6 @@
 #include "polyheal/repair/detail/distance.h"
 
+#include "polyheal/mesh/hash.h"
 #include "polyheal/mesh/mesh.h"
 
 #include <CGAL/AABB_traits.h>
@@ -935,37 +936,209 @@ double SurfaceDistance::squared_distance(const Point3d& p) const {
   return nearest(p).first;
 }
 
+namespace {
+struct Box3 {
+  Point3d lo, hi;
+};
+bool overlap(const Box3& a, const Box3& b) {
+  for (int k = 0; k < 3; ++k)
+    if (a.hi[k] < b.lo[k] || b.hi[k] < a.lo[k]) return false;
+  return true;
+}
+/// Triangle t's bounding box, grown by `grow` (and then rounded outward).
+Box3 box_of(const Corners& t, double grow) {
+  Box3 b;
+  for (int k = 0; k < 3; ++k) {
+    b.lo[k] = std::min({t[0][k], t[1][k], t[2][k]});
+    b.hi[k] = std::max({t[0][k], t[1][k], t[2][k]});
+    if (grow > 0) {
+      b.lo[k] = std::nextafter(b.lo[k] - grow, -HUGE_VAL);
+      b.hi[k] = std::nextafter(b.hi[k] + grow, HUGE_VAL);
+    }
+  }
+  return b;
+}
+
+/// A few boxes in a static tree (median splits): does any meet a box?
+class BoxTree {
+ public:
+  explicit BoxTree(std::vector<Box3> boxes) : boxes_(std::move(boxes)) {
+    if (!boxes_.empty()) build(0, boxes_.size());
+  }
+  bool meets(const Box3& b) const {
+    if (nodes_.empty()) return false;
+    std::int32_t stack[64];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& n = nodes_[std::size_t(stack[--top])];
+      if (!overlap(n.box, b)) continue;
+      if (n.left < 0) {
+        for (std::size_t i = n.first; i < n.last; ++i)
+          if (overlap(boxes_[i], b)) return true;
+        continue;
+      }
+      stack[top++] = n.left;
+      stack[top++] = n.right;
+    }
+    return false;
+  }
+
+ private:
+  struct Node {
+    Box3 box;
+    std::int32_t left = -1, right = -1;  // children; leaves: boxes_[first, last)
+    std::size_t first = 0, last = 0;
+  };
+  std::int32_t build(std::size_t first, std::size_t last) {  // depth about log2(n / 4): far below 64
+    const std::int32_t id = static_cast<std::int32_t>(nodes_.size());
+    nodes_.emplace_back();
+    Box3 all = boxes_[first];
+    for (std::size_t i = first; i < last; ++i)
+      for (int k = 0; k < 3; ++k) {
+        all.lo[k] = std::min(all.lo[k], boxes_[i].lo[k]);
+        all.hi[k] = std::max(all.hi[k], boxes_[i].hi[k]);
+      }
+    nodes_[std::size_t(id)].box = all;
+    if (last - first <= 4) {
+      nodes_[std::size_t(id)].first = first;
+      nodes_[std::size_t(id)].last = last;
+      return id;
+    }
+    int axis = 0;
+    for (int k = 1; k < 3; ++k)
+      if (all.hi[k] - all.lo[k] > all.hi[axis] - all.lo[axis]) axis = k;
+    const std::size_t mid = first + (last - first) / 2;
+    std::nth_element(boxes_.begin() + std::ptrdiff_t(first), boxes_.begin() + std::ptrdiff_t(mid),
+                     boxes_.begin() + std::ptrdiff_t(last), [axis](const Box3& x, const Box3& y) {
+                       return x.lo[axis] + x.hi[axis] < y.lo[axis] + y.hi[axis];
+                     });
+    const std::int32_t l = build(first, mid), r = build(mid, last);
+    nodes_[std::size_t(id)].left = l;
+    nodes_[std::size_t(id)].right = r;
+    return id;
+  }
+  std::vector<Box3> boxes_;
+  std::vector<Node> nodes_;
+};
+
+/// The triangles of `a` that `b` lacks and those of `b` that `a` lacks,
+/// counted with multiplicity (k copies in one, j in the other: k - j
+/// copies) and sorted: what std::set_difference of the two sorted lists
+/// gives, both ways. By one flat hash table over b's triangles (the first
+/// copy of each, with how many of its copies a has not matched): sorting
+/// both soups for this was 0.8 s of measuring a hole-filled 1M-face scan.
+/// (Canonical triangles compare as doubles: -0.0 == 0.0, and hash alike.)
+void differences(const std::vector<Corners>& a, const std::vector<Corners>& b, std::vector<Corners>* only_a,
+                 std::vector<Corners>* only_b) {
+  auto hashes = [](const std::vector<Corners>& t) {
+    std::vector<std::uint64_t> h(t.size());
+    tbb::parallel_for(std::size_t(0), t.size(), [&](std::size_t i) { h[i] = hash_points(t[i].data(), 3); });
+    return h;
+  };
+  std::vector<Index> table = empty_table(b.size());
+  std::vector<Index> unmatched(b.size(), 0);  // by first copy
+  {
+    const std::vector<std::uint64_t> hb = hashes(b);
+    for (std::size_t i = 0; i < b.size(); ++i) {
+      const std::size_t slot = probe(table, hb[i], [&](std::size_t s) { return b[table[s]] == b[i]; });
+      if (table[slot] == kEmptySlot) table[slot] = static_cast<Index>(i);
+      ++unmatched[table[slot]];
+    }
+  }
+  const std::vector<std::uint64_t> ha = hashes(a);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const std::size_t slot = probe(table, ha[i], [&](std::size_t s) { return b[table[s]] == a[i]; });
+    if (table[slot] != kEmptySlot && unmatched[table[slot]] > 0) --unmatched[table[slot]];
+    else if (only_a) only_a->push_back(a[i]);
+  }
+  if (only_a) tbb::parallel_sort(only_a->begin(), only_a->end());
+  if (!only_b) return;
+  for (std::size_t i = 0; i < b.size(); ++i) only_b->insert(only_b->end(), unmatched[i], b[i]);
+  tbb::parallel_sort(only_b->begin(), only_b->end());
+}
+
+/// The triangles of `to` that can hold the nearest point of `to` to a point
+/// of a triangle of `from`, when each triangle of `from` has a corner that
+/// is a corner of `to` (hole fills, local moves): a point of such a triangle
+/// is within its longest edge of that corner, so its nearest point of `to`
+/// lies in the triangle's box grown by that edge, in a triangle of `to`
+/// whose box meets that box: those, into `out`. Otherwise false. Distances
+/// from `from` to these equal those to `to` (and bounds on them found with
+/// fewer triangles still hold): a repair that changed a few faces of a
+/// large input is measured without indexing the whole input (0.43 s of a
+/// hole-filled 1M-face scan's measure).
+bool reachable(const std::vector<Corners>& to, const std::vector<Corners>& from, std::vector<Corners>& out) {
+  if (from.empty() || 4 * from.size() > to.size()) return false;  // no gain to speak of
+  // from's corners, and which of them are corners of `to`
+  std::vector<Point3d> corner;
+  for (const Corners& t : from) corner.insert(corner.end(), t.begin(), t.end());
+  std::vector<Index> table = empty_table(corner.size());
+  for (std::size_t i = 0; i < corner.size(); ++i) {
+    const std::size_t slot =
+        probe(table, hash_points(&corner[i], 1), [&](std::size_t s) { return corner[table[s]] == corner[i]; });
+    if (table[slot] == kEmptySlot) table[slot] = static_cast<Index>(i);
+  }
+  std::vector<char> on_to(corner.size(), 0);  // by first copy
+  for (const Corners& t : to)
+    for (const Point3d& p : t) {
+      const std::size_t slot = probe(table, hash_points(&p, 1), [&](std::size_t s) { return corner[table[s]] == p; });
+      if (table[slot] != kEmptySlot) on_to[table[slot]] = 1;
+    }
+  std::vector<Box3> grown;
+  for (std::size_t f = 0; f < from.size(); ++f) {
+    bool cornered = false;
+    for (std::size_t k = 3 * f; k < 3 * f + 3; ++k)  // (every corner is in the table)
+      cornered = cornered || on_to[table[probe(table, hash_points(&corner[k], 1),
+                                               [&](std::size_t s) { return corner[table[s]] == corner[k]; })]];
+    if (!cornered) return false;
+    const Corners& t = from[f];
+    // (the edge in doubles, taken a little longer)
+    const double edge = std::max({norm(t[0], t[1]), norm(t[1], t[2]), norm(t[2], t[0])});
+    grown.push_back(box_of(t, edge * (1 + 1e-9) + std::numeric_limits<double>::min()));
+  }
+  const BoxTree tree(std::move(grown));
+  std::vector<char> near(to.size(), 0);
+  tbb::parallel_for(std::size_t(0), to.size(), [&](std::size_t i) { near[i] = tree.meets(box_of(to[i], 0)); });
+  out.clear();
+  for (std::size_t i = 0; i < to.size(); ++i)
+    if (near[i]) out.push_back(to[i]);
+  return true;
+}
+
+/// From `from` (triangles of a soup that the other lacks) to the surface `to`.
+double measured(const std::vector<Corners>& from, const std::vector<Corners>& to, double error_bound,
+                const std::function<bool(const Point3d&)>* skip = nullptr) {
+  if (from.empty()) return 0.0;
+  std::vector<Corners> near;
+  return one_sided(from, SurfaceDistance(reachable(to, from, near) ? near : to), error_bound, skip);
+}
+}  // namespace
+
 std::array<double, 2> one_sided_distances(const Soup& a, const Soup& b, double error_bound) {
   // A triangle present in both soups is at distance 0 from the other, so
   // each direction needs only the triangles the other soup lacks: a repair
   // that changed little is measured in time proportional to what it changed.
-  std::vector<Corners> ta = triangles_of(a), tb = triangles_of(b);
-  std::vector<Corners> sa = ta, sb = tb;
-  tbb::parallel_sort(sa.begin(), sa.end());
-  tbb::parallel_sort(sb.begin(), sb.end());
+  const std::vector<Corners> ta = triangles_of(a), tb = triangles_of(b);
   std::vector<Corners> only_a, only_b;
-  std::set_difference(sa.begin(), sa.end(), sb.begin(), sb.end(), std::back_inserter(only_a));
-  std::set_difference(sb.begin(), sb.end(), sa.begin(), sa.end(), std::back_inserter(only_b));
+  differences(ta, tb, &only_a, &only_b);
   if ((ta.empty() && !only_b.empty()) || (tb.empty() && !only_a.empty())) return {-1.0, -1.0};
   // The two directions are independent (each builds its own tree): one per
   // core, deterministic whatever the scheduling.
   double ab = 0.0, ba = 0.0;
-  tbb::parallel_invoke([&] { if (!only_a.empty()) ab = one_sided(only_a, SurfaceDistance(tb), error_bound); },
-                       [&] { if (!only_b.empty()) ba = one_sided(only_b, SurfaceDistance(ta), error_bound); });
+  tbb::parallel_invoke([&] { ab = measured(only_a, tb, error_bound); },
+                       [&] { ba = measured(only_b, ta, error_bound); });
   return {ab, ba};
 }
 
 namespace {
 /// From a to b only (points where `skip` holds, if given, do not count).
 double one_way(const Soup& a, const Soup& b, double error_bound, const std::function<bool(const Point3d&)>* skip) {
-  std::vector<Corners> ta = triangles_of(a), tb = triangles_of(b);
-  std::vector<Corners> sa = ta, sb = tb;
-  tbb::parallel_sort(sa.begin(), sa.end());
-  tbb::parallel_sort(sb.begin(), sb.end());
+  const std::vector<Corners> ta = triangles_of(a), tb = triangles_of(b);
   std::vector<Corners> only_a;
-  std::set_difference(sa.begin(), sa.end(), sb.begin(), sb.end(), std::back_inserter(only_a));
+  differences(ta, tb, &only_a, nullptr);
   if (tb.empty() && !only_a.empty()) return -1.0;
-  return only_a.empty() ? 0.0 : one_sided(only_a, SurfaceDistance(tb), error_bound, skip);
+  return measured(only_a, tb, error_bound, skip);
 }
 }  // namespace
 
