@@ -2,6 +2,7 @@
 // fixtures, and the parallel pass against the sequential one.
 #include <catch2/catch.hpp>
 
+#include <optional>
 #include <set>
 
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
@@ -138,4 +139,59 @@ TEST_CASE("self_intersections: the near-simplex searches of flagged faces find e
     CHECK(!expected_vf.empty());
     CHECK(!expected_ee.empty());
   }
+}
+
+TEST_CASE("self_intersections: pairs found from an earlier surface's equal a full search of the edited one",
+          "[inspect]") {
+  // mannequin-devil (1643 pairs) edited as repairs edit: points renumbered
+  // and faces reordered and turned (nothing changed), then faces removed
+  // (some of them intersecting), a vertex moved (its faces changed), a face
+  // given a copy (which meets it), a new fan and a quad added. The pairs
+  // among faces kept as they were come from the earlier search, the rest
+  // from a search of the changed faces: together what a full search finds.
+  const Soup base = read_soup(test::fixture("mannequin-devil.off"));
+  const std::vector<FacePair> base_pairs = find_self_intersections(base);
+  REQUIRE(base_pairs.size() > 1000);
+  Soup renumbered;  // points reversed, faces reversed in order and turned
+  const Index n = static_cast<Index>(base.points.size());
+  for (Index i = 0; i < n; ++i) renumbered.points.push_back(base.points[n - 1 - i]);
+  for (std::size_t f = base.face_count(); f-- > 0;) {
+    const FaceView v = base.face(f);
+    renumbered.add_triangle(n - 1 - v[2], n - 1 - v[1], n - 1 - v[0]);
+  }
+  auto same_as_full = [&](const Soup& soup) {
+    const std::optional<std::vector<FacePair>> from = find_self_intersections_from(soup, base, base_pairs, 0.5);
+    REQUIRE(from);
+    const std::vector<FacePair> full = find_self_intersections(soup);
+    CHECK(full.size() > 100);
+    CHECK(*from == full);
+  };
+  same_as_full(renumbered);
+
+  Soup edited;
+  edited.points = renumbered.points;
+  std::vector<char> dropped(renumbered.face_count(), 0);
+  for (std::size_t i = 0; i < base_pairs.size(); i += 37) dropped[renumbered.face_count() - 1 - base_pairs[i].first] = 1;
+  for (std::size_t f = 0; f < renumbered.face_count(); f += 101) dropped[f] = 1;
+  for (std::size_t f = 0; f < renumbered.face_count(); ++f)
+    if (!dropped[f]) edited.add_face(renumbered.face(f).begin(), renumbered.face(f).end());
+  // a vertex of an intersecting face pushed out: its faces are new
+  const Index moved = renumbered.face(renumbered.face_count() - 1 - base_pairs[500].second)[0];
+  for (int k = 0; k < 3; ++k) edited.points[moved][k] *= 1.05;
+  const FaceView copied = edited.face(10);
+  const std::array<Index, 3> copy{copied[0], copied[1], copied[2]};
+  edited.add_triangle(copy[2], copy[1], copy[0]);  // a copy, turned
+  const Index c = static_cast<Index>(edited.points.size());
+  edited.points.push_back({0, 0, 0});  // a fan from the centre of the bounding box: it crosses the surface
+  for (std::size_t f = 0; f < 40; ++f) {
+    const FaceView v = edited.face(f * 300);
+    edited.add_triangle(c, v[0], v[1]);
+  }
+  const std::array<Index, 4> quad{c, edited.face(7)[0], edited.face(7)[1], edited.face(7)[2]};
+  edited.add_face(quad.begin(), quad.end());
+  same_as_full(edited);
+  // most faces changed: a full search is quicker, and nothing is returned
+  Soup shifted = edited;
+  for (Point3d& p : shifted.points) p[0] += 1e-3;
+  CHECK_FALSE(find_self_intersections_from(shifted, base, base_pairs));
 }

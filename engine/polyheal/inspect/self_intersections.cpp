@@ -7,9 +7,11 @@
 
 #include <CGAL/box_intersection_d.h>
 #include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
 #include "polyheal/inspect/detail/parallel.h"
+#include "polyheal/mesh/hash.h"
 #include "polyheal/inspect/predicates.h"
 #include "polyheal/inspect/detail/triangle_pair.h"
 
@@ -226,6 +228,75 @@ std::vector<FacePair> find_self_intersections(const Soup& soup, const SelfInters
   for (auto& v : local) pairs.insert(pairs.end(), v.begin(), v.end());
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());  // polygons: several fan pairs
+  return pairs;
+}
+
+std::optional<std::vector<FacePair>> find_self_intersections_from(const Soup& soup, const Soup& base,
+                                                                  const std::vector<FacePair>& base_pairs,
+                                                                  double most) {
+  using Key = std::array<Point3d, 3>;
+  auto key = [](const Soup& s, std::size_t f) {  // a triangle's corners, sorted
+    const FaceView v = s.face(f);
+    Key k{s.points[v[0]], s.points[v[1]], s.points[v[2]]};
+    std::sort(k.begin(), k.end());
+    return k;
+  };
+  // base's triangles by their corners: the first of each (copies meet the
+  // same faces, but for each other)
+  std::vector<Key> base_key(base.face_count());
+  std::vector<std::uint64_t> base_hash(base.face_count());
+  tbb::parallel_for(std::size_t(0), base.face_count(), [&](std::size_t f) {
+    if (base.face(f).size() != 3) return;
+    base_key[f] = key(base, f);
+    base_hash[f] = hash_points(base_key[f].data(), 3);
+  });
+  std::vector<Index> first(base.face_count(), kEmptySlot);
+  std::vector<Index> table = empty_table(base.face_count());
+  for (std::size_t f = 0; f < base.face_count(); ++f) {
+    if (base.face(f).size() != 3) continue;
+    const std::size_t slot = probe(table, base_hash[f], [&](std::size_t s) {
+      return base_hash[table[s]] == base_hash[f] && base_key[table[s]] == base_key[f];
+    });
+    if (table[slot] == kEmptySlot) table[slot] = static_cast<Index>(f);
+    first[f] = table[slot];
+  }
+  // soup's faces that are base's triangles, each taken once
+  std::vector<Index> image(soup.face_count(), kEmptySlot);  // the base triangle (first copy) each face is
+  tbb::parallel_for(std::size_t(0), soup.face_count(), [&](std::size_t g) {
+    if (soup.face(g).size() != 3) return;
+    const Key k = key(soup, g);
+    const std::uint64_t h = hash_points(k.data(), 3);
+    image[g] = table[probe(table, h, [&](std::size_t s) { return base_hash[table[s]] == h && base_key[table[s]] == k; })];
+  });
+  std::vector<char> changed(soup.face_count(), 1);
+  std::vector<Index> taken(base.face_count(), kEmptySlot);  // by first copy: the soup face that is it
+  std::size_t n_changed = 0;
+  for (std::size_t g = 0; g < soup.face_count(); ++g) {
+    const Index f = image[g];
+    if (f == kEmptySlot) {
+      ++n_changed;
+    } else if (taken[f] == kEmptySlot) {
+      taken[f] = static_cast<Index>(g);
+      changed[g] = 0;
+    } else {  // a copy in soup: it meets its twin
+      n_changed += 1 + (changed[taken[f]] == 0);
+      changed[taken[f]] = 1;
+    }
+    if (double(n_changed) > most * double(soup.face_count())) return std::nullopt;
+  }
+  std::vector<FacePair> pairs;
+  for (const FacePair& p : base_pairs) {
+    if (first[p.first] == kEmptySlot || first[p.second] == kEmptySlot) continue;  // polygons
+    const Index a = taken[first[p.first]], b = taken[first[p.second]];
+    if (a == kEmptySlot || b == kEmptySlot || a == b || changed[a] || changed[b]) continue;
+    pairs.push_back({std::min<std::size_t>(a, b), std::max<std::size_t>(a, b)});
+  }
+  SelfIntersectionOptions o;
+  o.only = &changed;
+  const std::vector<FacePair> found = find_self_intersections(soup, o);
+  pairs.insert(pairs.end(), found.begin(), found.end());
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());  // base's copies pair alike
   return pairs;
 }
 

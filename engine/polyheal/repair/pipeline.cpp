@@ -15,6 +15,7 @@
 
 #include "polyheal/inspect/nesting.h"
 #include "polyheal/inspect/predicates.h"
+#include "polyheal/inspect/self_intersections.h"
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/hash.h"
 #include "polyheal/mesh/topology.h"
@@ -198,10 +199,16 @@ class Pipeline {
     return o_.for_tetgen && wanted(kStepDegenerate) && !done() && cur_.report.certified_clean();
   }
 
-  State inspected(Soup soup) const {
+  /// `base`: an inspected surface the stage made `soup` from: its
+  /// intersecting pairs serve the faces the stage kept as they were
+  /// (find_self_intersections_from).
+  State inspected(Soup soup, const State* base = nullptr) const {
     State s;
     InspectOptions io;
     io.tetgen_segments = o_.for_tetgen;
+    std::optional<std::vector<FacePair>> pairs;
+    if (base) pairs = find_self_intersections_from(soup, base->soup, base->report.self_intersections);
+    if (pairs) io.self_intersections = &*pairs;
     s.report = inspect(soup, io);
     // What our checks call TetGen-ready, TetGen itself may still refuse (its
     // boundary recovery rounds Steiner points): where the caller can run it,
@@ -249,7 +256,7 @@ class Pipeline {
     const auto t0 = std::chrono::steady_clock::now();
     try {
       pending_fills_.clear();
-      State next = inspected(run(s));
+      State next = inspected(run(s), &cur_);
       s.faces_out = next.soup.face_count();
       s.defects_after = next.defects;
       const bool next_ok = certified(next.report, o_.for_tetgen);
