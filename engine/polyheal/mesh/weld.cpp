@@ -3,52 +3,20 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 
 #include "polyheal/mesh/hash.h"
 #include "polyheal/mesh/union_find.h"
 
 namespace polyheal {
-namespace {
-
-struct PointKey {
-  std::uint64_t b[3];
-  bool operator==(const PointKey& o) const { return b[0] == o.b[0] && b[1] == o.b[1] && b[2] == o.b[2]; }
-};
-struct PointKeyHash {
-  std::size_t operator()(const PointKey& k) const {
-    std::uint64_t h = 0x9E3779B97F4A7C15ull;
-    for (std::uint64_t v : k.b) {
-      h ^= v + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
-      h *= 0xBF58476D1CE4E5B9ull;
-    }
-    return static_cast<std::size_t>(h ^ (h >> 31));
-  }
-};
-
-PointKey key_of(const Point3d& p) {
-  PointKey k;
-  for (int i = 0; i < 3; ++i) {
-    double v = p[i] + 0.0;  // -0.0 + 0.0 == +0.0: both zeros weld
-    std::memcpy(&k.b[i], &v, sizeof v);
-  }
-  return k;
-}
-
-constexpr Index kEmpty = kEmptySlot;
-
-}  // namespace
 
 Weld weld_identical_points(const std::vector<Point3d>& points) {
   Weld w;
   w.representative.resize(points.size());
-  std::vector<Index> table = empty_table(points.size());  // first point of each value
-  std::vector<PointKey> keys(points.size());
-  const PointKeyHash hash;
+  std::vector<Index> table = empty_table(points.size());  // first point of each value (== on doubles: both zeros weld)
   for (std::size_t i = 0; i < points.size(); ++i) {
-    keys[i] = key_of(points[i]);
-    const std::size_t slot = probe(table, hash(keys[i]), [&](std::size_t s) { return keys[table[s]] == keys[i]; });
-    if (table[slot] == kEmpty) {
+    const std::size_t slot =
+        probe(table, hash_points(&points[i], 1), [&](std::size_t s) { return points[table[s]] == points[i]; });
+    if (table[slot] == kEmptySlot) {
       table[slot] = static_cast<Index>(i);
       w.representative[i] = static_cast<Index>(i);
     } else {
@@ -76,7 +44,7 @@ std::vector<Index> weld_near_points(const std::vector<Point3d>& pts, const std::
   // its points through `next`: with d far below the point spacing nearly
   // every point has a cell of its own, and a node-based map allocated one
   // list per point (1.2 s of a 1M-face scan's repair).
-  std::vector<Index> head = empty_table(pts.size()), next(pts.size(), kEmpty);
+  std::vector<Index> head = empty_table(pts.size()), next(pts.size(), kEmptySlot);
   std::vector<std::uint64_t> cell_key(head.size());
   auto slot_of = [&](std::uint64_t k) {  // k's slot, or the free one where it would go
     std::uint64_t h = k;  // splitmix64's finalizer: the keys' bits are fields
@@ -90,7 +58,7 @@ std::vector<Index> weld_near_points(const std::vector<Point3d>& pts, const std::
     for (std::int64_t i = ci - 1; i <= ci + 1; ++i)
       for (std::int64_t j = cj - 1; j <= cj + 1; ++j)
         for (std::int64_t k = ck - 1; k <= ck + 1; ++k)
-          for (Index w = head[slot_of(key(i, j, k))]; w != kEmpty; w = next[w]) {
+          for (Index w = head[slot_of(key(i, j, k))]; w != kEmptySlot; w = next[w]) {
             double s = 0;
             for (int c = 0; c < 3; ++c) s += (pts[v][c] - pts[w][c]) * (pts[v][c] - pts[w][c]);
             if (s <= d * d) uf.unite(v, w);
