@@ -235,11 +235,9 @@ std::optional<std::vector<FacePair>> find_self_intersections_from(const Soup& so
                                                                   const std::vector<FacePair>& base_pairs,
                                                                   double most) {
   using Key = std::array<Point3d, 3>;
-  auto key = [](const Soup& s, std::size_t f) {  // a triangle's corners, sorted
+  auto key = [](const Soup& s, std::size_t f) {
     const FaceView v = s.face(f);
-    Key k{s.points[v[0]], s.points[v[1]], s.points[v[2]]};
-    std::sort(k.begin(), k.end());
-    return k;
+    return sorted_corners(s.points[v[0]], s.points[v[1]], s.points[v[2]]);
   };
   // base's triangles by their corners: the first of each (copies meet the
   // same faces, but for each other)

@@ -4,6 +4,8 @@
 // a big scan's repair). No CGAL here.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -25,6 +27,14 @@ inline std::uint64_t hash_points(const Point3d* p, std::size_t n, std::uint64_t 
       h ^= h >> 31;
     }
   return h;
+}
+
+/// A triangle's corners in a canonical order (sorted), the key of "the same
+/// triangle" whatever its rotation or orientation (with hash_points).
+inline std::array<Point3d, 3> sorted_corners(const Point3d& a, const Point3d& b, const Point3d& c) {
+  std::array<Point3d, 3> t{a, b, c};
+  std::sort(t.begin(), t.end());
+  return t;
 }
 
 inline constexpr Index kEmptySlot = ~Index(0);

@@ -37,22 +37,16 @@ K::Point_3 point(const Point3d& p) { return K::Point_3(p[0], p[1], p[2]); }
 
 using Corners = std::array<Point3d, 3>;
 
-/// A triangle's corners in a canonical order (sorted), so that the same
-/// face in two files compares equal whatever its rotation or orientation
+/// Each triangle's corners sorted (sorted_corners), so that the same face
+/// in two files compares equal whatever its rotation or orientation
 /// (distances do not see orientation; a reoriented face is not a change).
-Corners canonical(const Point3d& a, const Point3d& b, const Point3d& c) {
-  Corners t{a, b, c};
-  std::sort(t.begin(), t.end());
-  return t;
-}
-
 std::vector<Corners> triangles_of(const Soup& soup) {
   std::vector<Corners> out;
   out.reserve(soup.indices.size() / 3);
   for (std::size_t f = 0; f < soup.face_count(); ++f) {
     const FaceView face = soup.face(f);
     for (std::size_t k = 1; k + 1 < face.size(); ++k)
-      out.push_back(canonical(soup.points[face[0]], soup.points[face[k]], soup.points[face[k + 1]]));
+      out.push_back(sorted_corners(soup.points[face[0]], soup.points[face[k]], soup.points[face[k + 1]]));
   }
   return out;
 }
