@@ -641,7 +641,8 @@ TAIL
   else old_section '## `polyheal repair`'; fi
 } > "$root/BENCHMARKS.md.new"
 if [ -f "$root/BENCHMARKS.md" ] && grep -q '^## Notes' "$root/BENCHMARKS.md"; then
-  sed -n '/^## Notes/,$p' "$root/BENCHMARKS.md" | { echo; cat; } >> "$root/BENCHMARKS.md.new"
+  tables=$(cat "$root/BENCHMARKS.md.new")  # without its trailing blank lines: one before the notes, every run
+  { printf '%s\n\n' "$tables"; sed -n '/^## Notes/,$p' "$root/BENCHMARKS.md"; } > "$root/BENCHMARKS.md.new"
 fi
 mv "$root/BENCHMARKS.md.new" "$root/BENCHMARKS.md"
 echo "wrote $root/BENCHMARKS.md" >&2
