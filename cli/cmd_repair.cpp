@@ -230,6 +230,7 @@ void run(RepairArgs& args, int& exit_code) {
     }
   const Soup input = read_repair_input(args, progress, o.read_s);
   args.options.observer = &progress;
+  args.options.float_coordinates = format_from_path(args.output) == Format::stl;
   args.options.fill_holes = !args.no_fill;
   args.options.orient_outward = !args.keep_orientation;
   try {
@@ -336,6 +337,8 @@ void add_repair(CLI::App& app, int& exit_code) {
       "  orient       a certified surface inside out (a component with negative volume, inside\n"
       "               no other) is turned outwards with what lies inside it; cavities stay.\n"
       "               Moves no vertex (--keep-orientation: off)\n"
+      "  round to floats  an STL output (float32 only): the surface rounded as the file will\n"
+      "               hold it, checked, and repaired again where rounding broke it (twice at most)\n"
       "The written file is read back and checked exactly; the report gives, stage by stage,\n"
       "what changed and the Hausdorff distance to the input.\n\n"
       "Exit 0: certified clean, within --max-deviation, no input component dropped;\n"

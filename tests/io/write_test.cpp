@@ -73,6 +73,35 @@ TEST_CASE("write: STL says when it rounded doubles to float", "[io]") {
   CHECK(read_soup(exact).points == floats.points);
 }
 
+TEST_CASE("write: nearest_float is what binary and ASCII STL hold of each coordinate", "[io]") {
+  const Soup s = awkward_soup();
+  // Each coordinate rounded the way the pipeline rounds a surface for STL:
+  // a std::array copied into a lambda (GCC 12 at -O2 -frounding-math
+  // returned such a copy unrounded when it was written double(float(c))).
+  auto to_float = [](Point3d p) {
+    for (double& c : p) c = nearest_float(c);
+    return p;
+  };
+  std::vector<Point3d> rounded;
+  for (const Point3d& p : s.points) rounded.push_back(to_float(p));
+  REQUIRE(rounded != s.points);  // the property is at stake: some coordinate is not a float
+  for (const Point3d& p : rounded)
+    for (double c : p) CHECK(nearest_float(c) == c);
+  for (bool ascii : {false, true}) {
+    const std::string path = scratch(ascii ? "nearest_ascii.stl" : "nearest_binary.stl");
+    WriteOptions o;
+    o.ascii = ascii;
+    o.allow_overwrite = true;
+    write_soup(s, path, o);
+    const Soup back = read_soup(path);
+    // STL welds identical corners on reading: compare positions face by face
+    REQUIRE(back.face_count() == s.face_count());
+    for (std::size_t f = 0; f < s.face_count(); ++f)
+      for (int k = 0; k < 3; ++k) CHECK(back.points[back.face(f)[k]] == rounded[s.face(f)[k]]);
+  }
+  CHECK(nearest_float(0x1.8fe67be8b21a5p-3) == 0x1.8fe67cp-3);
+}
+
 TEST_CASE("write: refuses to overwrite unless asked, and never clobbers the input", "[io][smoke]") {
   const Soup s = test::tetrahedron();
   // its own directory: tests running in parallel write next to each other

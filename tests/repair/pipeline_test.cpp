@@ -687,3 +687,37 @@ TEST_CASE("repair: small parts overlapping by half their size are united, not sq
   CHECK(a.output_to_input <= a.error_bound);  // every output face on the input: removed inside, nothing moved
   CHECK(a.components_out == 2);  // the body, and the two parts as one (the moves kept three)
 }
+
+TEST_CASE("repair for STL: the result is certified as rounded to floats, what rounding broke repaired", "[pipeline]") {
+  // Corpus meshes as a binary STL of them reads (coordinates floats): local
+  // moves (Generic_Twin) and a union (self_intersectA) make new vertices in
+  // doubles, and rounding them to floats makes faces intersect again.
+  for (const char* name : {"manifold__Generic_Twin_7863.1.t0_left.obj", "manifold__self_intersectA.obj"}) {
+    INFO(name);
+    const std::string stl = test::scratch(std::string("float_in_") + name + ".stl");
+    WriteOptions w;
+    w.allow_overwrite = true;
+    write_soup(read_soup(test::fixture(std::string("corpus/") + name)), stl, w);
+    const Soup in = read_soup(stl);
+    auto written_stl = [&](const RepairResult& r, const std::string& out) {
+      const std::string p = test::scratch(out);
+      write_soup(r.soup, p, w);
+      return assess(in, r.input, read_soup(p), 0.01 * r.report.diagonal, false);
+    };
+    RepairOptions doubles;
+    const RepairResult d = repair(in, doubles);
+    REQUIRE(written(in, d, std::string("float_d_") + name + ".off", 0.01 * d.report.diagonal).certified);
+    // the property at stake: the repair in doubles, written as STL, is not
+    REQUIRE_FALSE(written_stl(d, std::string("float_d_") + name + ".stl").certified);
+    RepairOptions floats;
+    floats.float_coordinates = true;
+    const RepairResult f = repair(in, floats);
+    CHECK(ran(f.report, "round to floats", true));
+    for (const Point3d& p : f.soup.points)
+      for (double c : p) CHECK(nearest_float(c) == c);
+    const Assessment a = written_stl(f, std::string("float_f_") + name + ".stl");
+    CHECK(a.certified);
+    CHECK(a.within_deviation);
+    CHECK(a.dropped_components == 0);
+  }
+}

@@ -12,6 +12,16 @@
 #include "polyheal/mesh/errors.h"
 
 namespace polyheal {
+
+double nearest_float(double v) {
+  // Through a float object in memory. GCC 12 at -O2 with -frounding-math
+  // (CGAL's interval arithmetic needs it) can drop the round trip
+  // double(float(v)): seen on a std::array<double, 3> passed by value to a
+  // lambda that rounds each coordinate, which returned it unrounded.
+  volatile float f = static_cast<float>(v);
+  return f;
+}
+
 namespace {
 
 void put_double(std::string& out, double v) {
@@ -118,7 +128,7 @@ void for_each_fan_triangle(const Soup& s, Emit emit) {
   }
 }
 
-bool fits_float(double v) { return static_cast<double>(static_cast<float>(v)) == v; }
+bool fits_float(double v) { return nearest_float(v) == v; }
 
 std::string stl(const Soup& s, bool ascii, bool& rounded) {
   rounded = false;
@@ -131,7 +141,7 @@ std::string stl(const Soup& s, bool ascii, bool& rounded) {
       out += "facet normal 0 0 0\nouter loop\n";
       for (const Point3d* p : {&a, &b, &c}) {
         out += "vertex ";
-        Point3d q{double(float((*p)[0])), double(float((*p)[1])), double(float((*p)[2]))};
+        Point3d q{nearest_float((*p)[0]), nearest_float((*p)[1]), nearest_float((*p)[2])};
         put_point(out, q);
         out += '\n';
       }

@@ -27,6 +27,10 @@ struct WriteInfo {
   std::size_t bytes = 0;
 };
 
+/// The float nearest to v (ties to even), as a double: what an STL file
+/// holds of the coordinate v.
+double nearest_float(double v);
+
 /// Serialises `soup` in `format` (no file system access).
 std::string serialize_soup(const Soup& soup, Format format, bool ascii, bool* rounded = nullptr);
 

@@ -15,6 +15,7 @@
 #include "polyheal/inspect/nesting.h"
 #include "polyheal/inspect/predicates.h"
 #include "polyheal/inspect/self_intersections.h"
+#include "polyheal/io/write.h"
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/hash.h"
 #include "polyheal/mesh/topology.h"
@@ -132,12 +133,58 @@ class Pipeline {
     if (done()) {
       orient_outward();
       r.clean_in = true;
-      result_.distances = cur_.distances;
-      result_.soup = std::move(cur_.soup);
-      r.seconds = seconds_since(t0);
-      return std::move(result_);
+    } else {
+      outline(true);
+      orient_outward();
     }
-    // The outline: each stage runs when the inspection says it is needed.
+    // A float format (STL): what rounding to floats broke is repaired from
+    // the rounded surface; the last rounding is what the file holds.
+    // The rounded surface with the fewest defects is kept: where rounding
+    // merges points a surface needs apart (a pinch vertex's copies: STL has
+    // no shared vertices, reading welds them), passes can only move defects.
+    std::optional<State> best;
+    std::vector<std::array<Point3d, 3>> best_fills;
+    std::size_t best_stage = 0;
+    for (int pass = 0; o_.float_coordinates; ++pass) {
+      round_to_floats();
+      if (!best || cur_.defects < best->defects) {
+        best = cur_;
+        best_fills = result_.hole_fills;
+        best_stage = result_.report.stages.size();
+      }
+      if (done() || pass == kFloatPasses) break;
+      outline(false);
+      orient_outward();
+    }
+    if (best && best->defects < cur_.defects) {
+      StageReport s;
+      s.name = "round to floats";
+      s.accepted = true;
+      s.faces_out = best->soup.face_count();
+      s.defects_after = best->defects;
+      s.hausdorff = best->hausdorff();
+      s.outcome = "the rounded surface of stage " + std::to_string(best_stage) + " taken back: " +
+                  std::to_string(best->defects) + " defects, " + std::to_string(cur_.defects) +
+                  " after the repairs since";
+      result_.report.stages.push_back(std::move(s));
+      cur_ = std::move(*best);
+      result_.hole_fills = std::move(best_fills);
+    }
+    result_.distances = cur_.distances;
+    result_.soup = std::move(cur_.soup);
+    r.seconds = seconds_since(t0);
+    return std::move(result_);
+  }
+
+ private:
+  /// Repairs after the first rounding to floats.
+  static constexpr int kFloatPasses = 2;
+
+  /// The stages, each run when the inspection of the current surface says
+  /// it is needed. `alternatives`: also the union of the surface as it was
+  /// before local moves (not after a rounding to floats: its defects are
+  /// rounding's, which the moves undo).
+  void outline(bool alternatives) {
     if (wanted(kStepClean) && !cur_.report.closed && !cur_.report.nonmanifold_edges.empty()) flaps();
     if (wanted(kStepClean) && needs_clean()) clean();
     if (wanted(kStepDegenerate) && !done() && !cur_.report.degenerate_faces.empty()) degenerate();
@@ -158,7 +205,7 @@ class Pipeline {
     std::optional<Soup> before_moves;  // the closed surface local moves started from
     if (wanted(kStepDeintersect) && !done() && !cur_.report.self_intersections.empty()) {
       const double before = cur_.hausdorff();
-      if (cur_.report.closed) before_moves = cur_.soup;
+      if (cur_.report.closed && alternatives) before_moves = cur_.soup;
       const StageReport& moves = deintersect();
       if (!moves.accepted || before + moves.hausdorff <= measure_bound()) before_moves.reset();
     }
@@ -183,14 +230,54 @@ class Pipeline {
         if (tetgen_pass_due()) tetgen_pass(cell);
       }
     }
-    orient_outward();
-    result_.distances = cur_.distances;
-    result_.soup = std::move(cur_.soup);
-    r.seconds = seconds_since(t0);
-    return std::move(result_);
   }
 
- private:
+  /// Every coordinate of the current surface to its nearest float, as an
+  /// STL writer writes it, and the points that become one welded as an STL
+  /// reader reads them back (a face losing a corner becomes zero-area: a
+  /// defect the stages remove). Always kept: it is what the file will hold.
+  /// The hole fills move with their corners. Nothing to round: no stage.
+  void round_to_floats() {
+    auto to_float = [](Point3d p) {
+      for (double& c : p) c = nearest_float(c);
+      return p;
+    };
+    Soup rounded = cur_.soup;
+    std::size_t moved = 0;
+    double most = 0;
+    for (Point3d& p : rounded.points) {
+      const Point3d q = to_float(p);
+      if (q == p) continue;
+      ++moved;
+      most = std::max(most, std::sqrt((q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) +
+                                      (q[2] - p[2]) * (q[2] - p[2])));
+      p = q;
+    }
+    if (moved == 0) return;
+    if (o_.observer) o_.observer->stage("round to floats");
+    const auto t0 = std::chrono::steady_clock::now();
+    const Weld weld = weld_identical_points(rounded.points);
+    if (weld.merged) rounded = apply_weld(rounded, weld);
+    StageReport s;
+    s.name = "round to floats";
+    State next = inspected(std::move(rounded), &cur_);
+    next.distances = detail::one_sided_distances(input_, next.soup, measure_bound());
+    for (auto& fill : result_.hole_fills)
+      for (Point3d& p : fill) p = to_float(p);
+    s.accepted = true;
+    s.faces_out = next.soup.face_count();
+    s.defects_after = next.defects;
+    s.hausdorff = next.hausdorff();
+    s.max_displacement = most;
+    s.counts = {{"vertices_rounded", double(moved)}, {"vertices_merged", double(weld.merged)}};
+    s.outcome = std::to_string(moved) + " vertices rounded to floats (STL), " + std::to_string(weld.merged) +
+                " merged; " + std::to_string(next.defects) + " defects after, " + std::to_string(cur_.defects) +
+                " before";
+    cur_ = std::move(next);
+    s.seconds = seconds_since(t0);
+    result_.report.stages.push_back(std::move(s));
+  }
+
   bool wanted(RepairStep s) const { return (o_.steps & s) != 0; }
   bool done() const { return certified(cur_.report, o_.for_tetgen); }
   /// For TetGen: a clean surface its tolerances would still stop.

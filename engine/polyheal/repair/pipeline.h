@@ -81,6 +81,11 @@ struct RepairOptions {
   /// it refused (Report::tetgen_refused), a defect the later stages work on
   /// like any other. Empty: TetGen is not run.
   std::function<bool(const Soup&)> tetgen_accepts;
+  /// The output format holds float32 coordinates only (STL): the result is
+  /// rounded to floats, inspected as rounded, and repaired again where the
+  /// rounding broke it (up to twice more), so that what is certified is what
+  /// the file will hold. False: doubles (OFF, OBJ, PLY).
+  bool float_coordinates = false;
   Observer* observer = nullptr;
 };
 
