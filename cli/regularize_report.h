@@ -63,7 +63,10 @@ inline nlohmann::json regularize_json(const RepairFiles& a, const RegularizeRepo
         {"collapsed_faces", r.rounding_collapsed},
         {"intersecting_pairs", r.rounding_pairs},
         {"vertices_moved", r.rounding_moves},
-        {"passes", r.rounding_passes}}},
+        {"passes", r.rounding_passes},
+        {"float_vertices", r.float_rounded},
+        {"float_intersecting_pairs", r.float_pairs},
+        {"float_vertices_moved", r.float_moves}}},
       {"max_distance_to_input", r.max_distance_to_input},
       {"max_distance_to_input_relative", r.max_distance_to_input / diag},
       {"hausdorff", r.hausdorff},
@@ -111,8 +114,11 @@ inline void print_regularize_text(const RepairFiles& a, const RegularizeReport& 
   if (r.pinches_split)
     std::printf("  the union's boundary pinched at %zu vertices: one copy per cone, moved into it by at most %.3g\n",
                 r.pinches_split, r.pinch_displacement);
+  if (r.float_rounded)
+    std::printf("  rounding to floats (STL) moved %zu vertices, made %zu pairs intersect; deintersect moved %zu\n",
+                r.float_rounded, r.float_pairs, r.float_moves);
   if (r.rounding_merged)
-    std::printf("  rounding to doubles merged %zu points; %zu faces thinner than a double step went\n",
+    std::printf("  rounding to doubles (and floats) merged %zu points; %zu faces thinner than its step went\n",
                 r.rounding_merged, r.rounding_collapsed);
   if (r.rounding_pairs)
     std::printf("  rounding to doubles made %zu pairs intersect; deintersect moved %zu vertices; %d regularization "
@@ -154,6 +160,7 @@ inline void regularize_and_report(const Soup& soup, const RepairFiles& args, Tty
   RegularizeOptions options;
   options.observer = &progress;
   options.certify = false;  // certified below, on the file as written
+  options.float_coordinates = format_from_path(args.output) == Format::stl;
   RegularizeResult result = run_repair(args, [&] { return regularize(soup, options); });
   RegularizeReport& r = result.report;
   finish_repair(

@@ -389,3 +389,32 @@ TEST_CASE("regularize: refuses what it does not handle, naming the problem") {
     CHECK_THROWS_WITH(regularize(fin), Catch::Contains("not closed"));
   }
 }
+
+TEST_CASE("regularize for STL: the union rounded to floats is certified as the file holds it") {
+  // self_intersectA as a binary STL of it reads: the union's points on its
+  // intersection curves, rounded to floats, make faces intersect (12 pairs).
+  const std::string stl = test::scratch("reg_float_in.stl");
+  WriteOptions w;
+  w.allow_overwrite = true;
+  write_soup(read_soup(test::fixture("corpus/manifold__self_intersectA.obj")), stl, w);
+  const Soup in = read_soup(stl);
+  auto written_stl = [&](const RegularizeResult& r, const std::string& name) {
+    const std::string p = test::scratch(name);
+    write_soup(r.soup, p, w);
+    return inspect(read_soup(p));
+  };
+  RegularizeOptions doubles;
+  const RegularizeResult d = regularize(in, doubles);
+  REQUIRE(d.report.certified);
+  REQUIRE_FALSE(written_stl(d, "reg_float_d.stl").certified_clean());  // at stake
+  RegularizeOptions floats;
+  floats.float_coordinates = true;
+  const RegularizeResult f = regularize(in, floats);
+  CHECK(f.report.float_pairs > 0);
+  for (const Point3d& p : f.soup.points)
+    for (double c : p) CHECK(nearest_float(c) == c);
+  CHECK(f.report.certified);
+  CHECK(written_stl(f, "reg_float_f.stl").certified_clean());
+  CHECK(off_surface(in, f.soup) < 1e-5 * d.report.bbox_diagonal);  // still on the input, up to the moves
+}
+

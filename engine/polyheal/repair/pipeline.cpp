@@ -179,12 +179,14 @@ class Pipeline {
  private:
   /// Repairs after the first rounding to floats.
   static constexpr int kFloatPasses = 2;
+  bool floats_now_ = false;  // in a repair after a rounding to floats (outline)
 
   /// The stages, each run when the inspection of the current surface says
   /// it is needed. `alternatives`: also the union of the surface as it was
-  /// before local moves (not after a rounding to floats: its defects are
-  /// rounding's, which the moves undo).
+  /// before local moves (false after a rounding to floats: its defects are
+  /// rounding's, which the moves undo; the union then rounds to floats).
   void outline(bool alternatives) {
+    floats_now_ = o_.float_coordinates && !alternatives;
     if (wanted(kStepClean) && !cur_.report.closed && !cur_.report.nonmanifold_edges.empty()) flaps();
     if (wanted(kStepClean) && needs_clean()) clean();
     if (wanted(kStepDegenerate) && !done() && !cur_.report.degenerate_faces.empty()) degenerate();
@@ -754,6 +756,11 @@ class Pipeline {
       ro.certify = false;
       ro.observer = o_.observer;
       ro.known_pairs = pairs;  // a reversed surface crosses itself where it did
+      // After a rounding to floats: the union's points rounded as the file
+      // will hold them (before it, a union in doubles: a float union's moves
+      // can leave what the doubles' passes repair, and the grid then takes
+      // over; cycloidal as STL went 22 -> 78 s and kept 2% of its faces).
+      ro.float_coordinates = floats_now_;
       RegularizeResult res = polyheal::regularize(turn ? reversed(from) : from, ro);
       const RegularizeReport& r = res.report;
       s.counts = {{"intersecting_pairs_in", double(r.intersecting_pairs_in)},

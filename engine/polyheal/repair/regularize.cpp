@@ -25,6 +25,7 @@
 #include <optional>
 #include <unordered_map>
 
+#include "polyheal/io/write.h"
 #include "polyheal/mesh/convert.h"
 #include "polyheal/mesh/errors.h"
 #include "polyheal/mesh/mesh.h"
@@ -1207,7 +1208,7 @@ void snap_rounded(RegularizeResult& result, std::vector<char>& made, RegularizeR
   Soup& s = result.soup;
   const Weld weld = weld_identical_points(s.points);
   if (weld.merged == 0) return;
-  r.rounding_merged = weld.merged;
+  r.rounding_merged += weld.merged;
   Soup out;
   std::vector<std::size_t> source;
   std::vector<std::int64_t> id(s.points.size(), -1);
@@ -1623,6 +1624,37 @@ bool kept_as_input(const Soup& input, const Soup& output, const std::vector<std:
   return true;
 }
 
+namespace {
+
+/// Moves apart the faces of `pairs` (intersecting since rounding) with
+/// deintersect's vertex moves: on the region around them
+/// (deintersect_locally), else on the whole surface, taken when it keeps
+/// every face (the provenance depends on their order). Faces changed are
+/// flagged in `recheck`. Returns the vertices moved.
+std::size_t moved_apart(Soup& soup, const std::vector<FacePair>& pairs, std::vector<char>& recheck) {
+  for (const FacePair& p : pairs) recheck[p.first] = recheck[p.second] = 1;
+  std::size_t moved = 0;
+  if (deintersect_locally(soup, pairs, recheck, moved)) return moved;
+  try {
+    DeintersectOptions d;
+    d.certify = false;
+    d.known_pairs = &pairs;  // every pair: faces without a rounded corner are the exact result's
+    DeintersectResult fixed = remove_self_intersections(soup, d);
+    if (fixed.soup.face_count() == soup.face_count()) {
+      for (std::size_t f = 0; f < fixed.soup.face_count(); ++f)
+        for (int k = 0; k < 3; ++k)
+          if (fixed.soup.points[fixed.soup.face(f)[k]] != soup.points[soup.face(f)[k]]) recheck[f] = 1;
+      soup = std::move(fixed.soup);
+      return fixed.report.moved_vertices;
+    }
+  } catch (const UnsupportedInput&) {
+    // not a manifold mesh: the caller's next pass or the certificate deals with it
+  }
+  return 0;
+}
+
+}  // namespace
+
 RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   RegularizeResult result;
   RegularizeReport& r = result.report;
@@ -1740,24 +1772,7 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
     // After the moves a pair can meet only where a face changed, or where a
     // pair found above was left as it was: only those faces are checked again.
     std::vector<char> recheck(result.soup.face_count(), 0);
-    for (const FacePair& p : rounded) recheck[p.first] = recheck[p.second] = 1;
-    if (!deintersect_locally(result.soup, rounded, recheck, r.rounding_moves)) try {
-      DeintersectOptions d;
-      d.certify = false;
-      d.known_pairs = &rounded;  // every pair: faces without a rounded corner are the exact result's
-      DeintersectResult fixed = remove_self_intersections(result.soup, d);
-      // its faces are the input's, in order, when it kept them all (the
-      // provenance depends on it); otherwise the passes below take over
-      if (fixed.soup.face_count() == result.soup.face_count()) {
-        for (std::size_t f = 0; f < fixed.soup.face_count(); ++f)
-          for (int k = 0; k < 3; ++k)
-            if (fixed.soup.points[fixed.soup.face(f)[k]] != result.soup.points[result.soup.face(f)[k]]) recheck[f] = 1;
-        r.rounding_moves = fixed.report.moved_vertices;
-        result.soup = std::move(fixed.soup);
-      }
-    } catch (const UnsupportedInput&) {
-      // not a manifold mesh: the next pass or the certificate deals with it
-    }
+    r.rounding_moves = moved_apart(result.soup, rounded, recheck);
     // What is still intersecting is regularized again, exactly, on the
     // rounded coordinates: each pass leaves fewer and smaller crossings to
     // round (iterated snap rounding).
@@ -1784,6 +1799,36 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
     r.faces_out = result.soup.face_count();
     r.vertices_out = result.soup.points.size();
   }
+  // Floats (the output is STL): every point rounded as the file will hold
+  // it, the points that become one merged; what that makes intersect is
+  // moved apart (deintersect's moves clear a face by a fraction of its
+  // edge, far above a float step) and rounded again, three times at most.
+  // The result is floats; what is left the certificate reports.
+  for (int round = 0; o.float_coordinates; ++round) {
+    std::vector<char> moved(result.soup.points.size(), 0);
+    for (std::size_t v = 0; v < result.soup.points.size(); ++v)
+      for (double& c : result.soup.points[v]) {
+        const double f = nearest_float(c);
+        moved[v] |= f != c;
+        c = f;
+      }
+    const std::size_t n = std::size_t(std::count(moved.begin(), moved.end(), char(1)));
+    if (n == 0) break;
+    r.float_rounded += n;
+    snap_rounded(result, moved, r);
+    std::vector<char> touched(result.soup.face_count(), 0);
+    for (std::size_t f = 0; f < result.soup.face_count(); ++f)
+      for (Index v : result.soup.face(f)) touched[f] |= moved[v];
+    SelfIntersectionOptions only;
+    only.only = &touched;
+    const std::vector<FacePair> pairs = find_self_intersections(result.soup, only);
+    r.float_pairs += pairs.size();
+    if (pairs.empty() || round == 3) break;
+    std::vector<char> recheck(result.soup.face_count(), 0);
+    r.float_moves += moved_apart(result.soup, pairs, recheck);
+  }
+  r.faces_out = result.soup.face_count();
+  r.vertices_out = result.soup.points.size();
   r.seconds_stitch = seconds_since(t0);
 
   if (o.certify) {

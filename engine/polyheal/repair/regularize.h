@@ -94,6 +94,10 @@ namespace polyheal {
 struct RegularizeOptions {
   bool certify = true;  // certify the rounded result (callers that certify the written file say false)
   int max_passes = 3;   // regularizations of the rounded result while rounding leaves crossings
+  /// Round the result to floats, not doubles (the output is STL, which
+  /// holds float32 only): every point to its nearest float, and the
+  /// crossings that rounding makes regularized again on the floats.
+  bool float_coordinates = false;
   Observer* observer = nullptr;
   /// Every intersecting pair of the input, as inspect() reports them, when
   /// the caller has them already (InspectOptions::self_intersections).
@@ -123,13 +127,16 @@ struct RegularizeReport {
   std::size_t faces_kept = 0;          // output faces that are input faces, bit for bit
   double seconds_detect = 0, seconds_intersections = 0, seconds_grow = 0, seconds_stitch = 0,
          seconds_certify = 0;
-  std::size_t rounding_merged = 0;     // distinct exact points that rounded to one double (merged)
+  std::size_t rounding_merged = 0;     // distinct exact points that rounded to one double, or float (merged)
   std::size_t rounding_collapsed = 0;  // faces that lost a corner to such a merge (thinner than a double step)
   std::size_t pinches_split = 0;       // vertices where the union's boundary pinched (split into one per cone)
   double pinch_displacement = 0;       // largest move of a pinch copy into its cone
   std::size_t rounding_pairs = 0;      // intersecting pairs rounding created (before their repair)
   std::size_t rounding_moves = 0;      // vertices deintersect moved to repair them
   int rounding_passes = 1;             // regularizations run (more than 1: crossings rounding left were regularized again)
+  std::size_t float_rounded = 0;       // with float_coordinates: vertices rounded to floats (each rounding counted)
+  std::size_t float_pairs = 0;         // ... intersecting pairs that rounding made (before their repair)
+  std::size_t float_moves = 0;         // ... vertices deintersect moved to repair them
   // certificate, on the soup as written (certify())
   Report out;                          // the exact inspection of the written file
   double max_distance_to_input = 0;    // output -> input (each output triangle to the input triangle it lies on)
