@@ -1626,6 +1626,17 @@ bool kept_as_input(const Soup& input, const Soup& output, const std::vector<std:
 
 namespace {
 
+/// The intersecting pairs with a face that has a corner flagged in `at`
+/// (rounded): only those faces can differ from the surface certified before.
+std::vector<FacePair> pairs_at(const Soup& soup, const std::vector<char>& at) {
+  std::vector<char> face(soup.face_count(), 0);
+  for (std::size_t f = 0; f < soup.face_count(); ++f)
+    for (Index v : soup.face(f)) face[f] |= at[v];
+  SelfIntersectionOptions only;
+  only.only = &face;
+  return find_self_intersections(soup, only);
+}
+
 /// Moves apart the faces of `pairs` (intersecting since rounding) with
 /// deintersect's vertex moves: on the region around them
 /// (deintersect_locally), else on the whole surface, taken when it keeps
@@ -1760,13 +1771,7 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   // doubles can make faces intersect again; deintersect's vertex moves (in
   // doubles) repair that where they can.
   if (o.observer) o.observer->stage("checking the rounded surface");
-  // Only faces with a rounded corner can differ from the exact result.
-  std::vector<char> rounded_face(result.soup.face_count(), 0);
-  for (std::size_t f = 0; f < result.soup.face_count(); ++f)
-    for (Index v : result.soup.face(f)) rounded_face[f] |= made[v];
-  SelfIntersectionOptions only;
-  only.only = &rounded_face;
-  const std::vector<FacePair> rounded = find_self_intersections(result.soup, only);
+  const std::vector<FacePair> rounded = pairs_at(result.soup, made);
   r.rounding_pairs = rounded.size();
   if (!rounded.empty()) {
     // After the moves a pair can meet only where a face changed, or where a
@@ -1816,12 +1821,7 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
     if (n == 0) break;
     r.float_rounded += n;
     snap_rounded(result, moved, r);
-    std::vector<char> touched(result.soup.face_count(), 0);
-    for (std::size_t f = 0; f < result.soup.face_count(); ++f)
-      for (Index v : result.soup.face(f)) touched[f] |= moved[v];
-    SelfIntersectionOptions only;
-    only.only = &touched;
-    const std::vector<FacePair> pairs = find_self_intersections(result.soup, only);
+    const std::vector<FacePair> pairs = pairs_at(result.soup, moved);
     r.float_pairs += pairs.size();
     if (pairs.empty() || round == 3) break;
     std::vector<char> recheck(result.soup.face_count(), 0);
