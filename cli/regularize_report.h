@@ -118,8 +118,8 @@ inline void print_regularize_text(const RepairFiles& a, const RegularizeReport& 
     std::printf("  rounding to floats (STL) moved %zu vertices, made %zu pairs intersect; deintersect moved %zu\n",
                 r.float_rounded, r.float_pairs, r.float_moves);
   if (r.rounding_merged)
-    std::printf("  rounding to doubles (and floats) merged %zu points; %zu faces thinner than its step went\n",
-                r.rounding_merged, r.rounding_collapsed);
+    std::printf("  rounding to %s merged %zu points; %zu faces thinner than its step went\n",
+                r.float_rounded ? "doubles, then floats," : "doubles", r.rounding_merged, r.rounding_collapsed);
   if (r.rounding_pairs)
     std::printf("  rounding to doubles made %zu pairs intersect; deintersect moved %zu vertices; %d regularization "
                 "passes\n",

@@ -91,6 +91,26 @@ TEST_CASE("offset: a cube outwards has the volume of the rounded cube, within th
   CHECK(hi <= d + 1e-12);
 }
 
+TEST_CASE("offset for STL: the regularized offset is rounded to floats, certified as the STL file holds it") {
+  const double a = 2, d = 0.3;
+  OffsetOptions o;
+  o.distance = d;
+  o.float_coordinates = true;
+  const OffsetResult r = offset(cube(a), o);
+  REQUIRE(r.report.regularize.float_rounded > 0);  // the strips' and patches' points are not floats
+  for (const Point3d& p : r.soup.points)
+    for (double c : p) CHECK(nearest_float(c) == c);
+  const std::string path = test::scratch("offset_cube_float.stl");
+  WriteOptions w;
+  w.allow_overwrite = true;
+  write_soup(r.soup, path, w);
+  const Soup back = read_soup(path);
+  CHECK(inspect(back).certified_clean());
+  const auto [lo, hi] = distance_range(cube(a), back);  // within a float step of the doubles' bounds
+  CHECK(lo >= d - r.report.tolerance - 1e-6);
+  CHECK(hi <= d + 1e-6);
+}
+
 TEST_CASE("offset: a cube inwards is the smaller cube, exactly (the corner pockets of the raw offset removed)") {
   OffsetOptions o;
   o.distance = -0.5;

@@ -425,6 +425,7 @@ OffsetResult offset(const Soup& input, const OffsetOptions& o) {
   RegularizeOptions ro;
   ro.certify = false;
   ro.observer = o.observer;
+  ro.float_coordinates = o.float_coordinates;
   RegularizeResult reg = regularize(result.raw, ro);
   r.regularized = true;
   drop_pockets(input, result.raw, std::abs(o.distance) - 2 * r.tolerance, reg, r);

@@ -47,6 +47,7 @@ struct OffsetOptions {
   double tolerance = -1;  // chord tolerance, model units; negative: 1% of |distance|
   bool regularize = true; // false: the raw offset only
   bool certify = true;    // certify the result (callers that certify the written file say false)
+  bool float_coordinates = false;  // the regularized offset rounded to floats (an STL output; RegularizeOptions)
   Observer* observer = nullptr;
 };
 
