@@ -256,6 +256,15 @@ expect 2 "repair malformed input" -- "$bin" repair "$tmp/bad.off" -o "$tmp/rp_ba
 expect 0 "repair closes the T-junction cracks of a CAD STL" -- "$bin" repair "$src/fixtures/angle_block.stl" -o "$tmp/rp_ab.off"
 grep_out "T-junctions closed" "$tmp/out" "repair reports the T-junctions"
 expect 0 "the closed CAD STL is within 1e-7% of the input" -- "$bin" compare "$src/fixtures/angle_block.stl" "$tmp/rp_ab.off" --max-deviation 1e-7%
+# An STL output holds floats only: repair and regularize round their result
+# to floats and repair what that breaks (local moves on Generic_Twin, a union
+# on self_intersectA: both failed the check of their STL file before).
+expect 0 "repair to STL certifies the rounded surface" -- "$bin" repair "$src/fixtures/corpus/manifold__Generic_Twin_7863.1.t0_left.obj" -o "$tmp/rp_gt.stl"
+grep_out "round to floats kept" "$tmp/out" "repair reports its rounding to floats"
+expect 0 "the repaired STL checks clean" -- "$bin" check "$tmp/rp_gt.stl"
+expect 0 "regularize to STL certifies the rounded union" -- "$bin" regularize "$src/fixtures/corpus/manifold__self_intersectA.obj" -o "$tmp/rg_sa.stl"
+grep_out "rounding to floats (STL)" "$tmp/out" "regularize reports its rounding to floats"
+expect 0 "the regularized STL checks clean" -- "$bin" check "$tmp/rg_sa.stl"
 expect 0 "repair help" -- "$bin" repair --help
 grep_out "regularize" "$tmp/out" "repair help lists the stages"
 expect 0 "compare: a certified repair within bounds" -- "$bin" compare "$src/fixtures/tube_edge3.0.off" "$tmp/rp_tube.off" --max-deviation 1%
