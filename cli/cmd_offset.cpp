@@ -99,7 +99,7 @@ void add_offset(CLI::App& app, int& exit_code) {
     const Soup soup = read_repair_input(*args, progress, read_s);
     args->options.observer = &progress;
     args->options.certify = false;  // certified below, on the file as written
-    args->options.float_coordinates = format_from_path(args->output) == Format::stl;
+    args->options.float_coordinates = float_output(*args);
     OffsetResult result = run_repair(*args, [&] { return offset(soup, args->options); });
     OffsetReport& r = result.report;
     double write_s = 0;

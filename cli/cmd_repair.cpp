@@ -230,7 +230,7 @@ void run(RepairArgs& args, int& exit_code) {
     }
   const Soup input = read_repair_input(args, progress, o.read_s);
   args.options.observer = &progress;
-  args.options.float_coordinates = format_from_path(args.output) == Format::stl;
+  args.options.float_coordinates = float_output(args);
   args.options.fill_holes = !args.no_fill;
   args.options.orient_outward = !args.keep_orientation;
   try {

@@ -160,7 +160,7 @@ inline void regularize_and_report(const Soup& soup, const RepairFiles& args, Tty
   RegularizeOptions options;
   options.observer = &progress;
   options.certify = false;  // certified below, on the file as written
-  options.float_coordinates = format_from_path(args.output) == Format::stl;
+  options.float_coordinates = float_output(args);
   RegularizeResult result = run_repair(args, [&] { return regularize(soup, options); });
   RegularizeReport& r = result.report;
   finish_repair(

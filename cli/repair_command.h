@@ -55,6 +55,10 @@ inline void parse_length(const std::string& option, const std::string& text, dou
   else absolute = v;
 }
 
+/// The output format holds float32 coordinates only (STL): the repairs
+/// round their result to floats themselves.
+inline bool float_output(const RepairFiles& f) { return format_from_path(f.output) == Format::stl; }
+
 /// Refuses to overwrite the input (or an existing output without
 /// --overwrite), then reads the input; `seconds` receives the time taken.
 inline Soup read_repair_input(const RepairFiles& f, TtyProgress& progress, double& seconds) {

@@ -22,6 +22,8 @@ double nearest_float(double v) {
   return f;
 }
 
+Point3d nearest_float(const Point3d& p) { return {nearest_float(p[0]), nearest_float(p[1]), nearest_float(p[2])}; }
+
 namespace {
 
 void put_double(std::string& out, double v) {
@@ -141,8 +143,7 @@ std::string stl(const Soup& s, bool ascii, bool& rounded) {
       out += "facet normal 0 0 0\nouter loop\n";
       for (const Point3d* p : {&a, &b, &c}) {
         out += "vertex ";
-        Point3d q{nearest_float((*p)[0]), nearest_float((*p)[1]), nearest_float((*p)[2])};
-        put_point(out, q);
+        put_point(out, nearest_float(*p));
         out += '\n';
       }
       out += "endloop\nendfacet\n";

@@ -30,6 +30,8 @@ struct WriteInfo {
 /// The float nearest to v (ties to even), as a double: what an STL file
 /// holds of the coordinate v.
 double nearest_float(double v);
+/// Each coordinate of p so.
+Point3d nearest_float(const Point3d& p);
 
 /// Serialises `soup` in `format` (no file system access).
 std::string serialize_soup(const Soup& soup, Format format, bool ascii, bool* rounded = nullptr);

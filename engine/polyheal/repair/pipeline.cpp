@@ -179,14 +179,12 @@ class Pipeline {
  private:
   /// Repairs after the first rounding to floats.
   static constexpr int kFloatPasses = 2;
-  bool floats_now_ = false;  // in a repair after a rounding to floats (outline)
 
   /// The stages, each run when the inspection of the current surface says
   /// it is needed. `alternatives`: also the union of the surface as it was
   /// before local moves (false after a rounding to floats: its defects are
   /// rounding's, which the moves undo; the union then rounds to floats).
   void outline(bool alternatives) {
-    floats_now_ = o_.float_coordinates && !alternatives;
     if (wanted(kStepClean) && !cur_.report.closed && !cur_.report.nonmanifold_edges.empty()) flaps();
     if (wanted(kStepClean) && needs_clean()) clean();
     if (wanted(kStepDegenerate) && !done() && !cur_.report.degenerate_faces.empty()) degenerate();
@@ -213,7 +211,7 @@ class Pipeline {
     }
     if (wanted(kStepRegularize)) {
       if (!done() && !cur_.report.certified_clean() && cur_.report.closed)
-        regularize(cur_.soup, "regularize", &cur_.report.self_intersections);
+        regularize(cur_.soup, "regularize", &cur_.report.self_intersections, o_.float_coordinates && !alternatives);
       if (before_moves) regularize(*before_moves, "regularize (without local moves)");
     }
     // TetGen's tolerances (for_tetgen): nearly degenerate faces and sharp
@@ -240,15 +238,11 @@ class Pipeline {
   /// defect the stages remove). Always kept: it is what the file will hold.
   /// The hole fills move with their corners. Nothing to round: no stage.
   void round_to_floats() {
-    auto to_float = [](Point3d p) {
-      for (double& c : p) c = nearest_float(c);
-      return p;
-    };
     Soup rounded = cur_.soup;
     std::size_t moved = 0;
     double most = 0;
     for (Point3d& p : rounded.points) {
-      const Point3d q = to_float(p);
+      const Point3d q = nearest_float(p);
       if (q == p) continue;
       ++moved;
       most = std::max(most, std::sqrt((q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) +
@@ -265,7 +259,7 @@ class Pipeline {
     State next = inspected(std::move(rounded), &cur_);
     next.distances = detail::one_sided_distances(input_, next.soup, measure_bound());
     for (auto& fill : result_.hole_fills)
-      for (Point3d& p : fill) p = to_float(p);
+      for (Point3d& p : fill) p = nearest_float(p);
     s.accepted = true;
     s.faces_out = next.soup.face_count();
     s.defects_after = next.defects;
@@ -744,8 +738,14 @@ class Pipeline {
     });
   }
 
-  /// `pairs`: from's intersecting pairs, when known (they are searched for otherwise).
-  void regularize(const Soup& from, const char* name, const std::vector<FacePair>* pairs = nullptr) {
+  /// `pairs`: from's intersecting pairs, when known (they are searched for
+  /// otherwise). `floats`: the union's points rounded to floats, as the file
+  /// will hold them — after a rounding to floats only (a union in doubles
+  /// first: a float union's moves can leave what the doubles' passes repair,
+  /// and the grid then takes over; cycloidal as STL went 22 -> 78 s and kept
+  /// 2% of its faces).
+  void regularize(const Soup& from, const char* name, const std::vector<FacePair>* pairs = nullptr,
+                  bool floats = false) {
     // A closed surface that encloses negative volume (exact sign) is inside
     // out whatever its overlaps: its union is empty (winding numbers <= 0),
     // and the union of the surface turned outwards is what it stands for.
@@ -756,11 +756,7 @@ class Pipeline {
       ro.certify = false;
       ro.observer = o_.observer;
       ro.known_pairs = pairs;  // a reversed surface crosses itself where it did
-      // After a rounding to floats: the union's points rounded as the file
-      // will hold them (before it, a union in doubles: a float union's moves
-      // can leave what the doubles' passes repair, and the grid then takes
-      // over; cycloidal as STL went 22 -> 78 s and kept 2% of its faces).
-      ro.float_coordinates = floats_now_;
+      ro.float_coordinates = floats;
       RegularizeResult res = polyheal::regularize(turn ? reversed(from) : from, ro);
       const RegularizeReport& r = res.report;
       s.counts = {{"intersecting_pairs_in", double(r.intersecting_pairs_in)},

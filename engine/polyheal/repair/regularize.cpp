@@ -1801,8 +1801,6 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
         break;  // e.g. rounding made a face zero-area: the certificate reports it
       }
     }
-    r.faces_out = result.soup.face_count();
-    r.vertices_out = result.soup.points.size();
   }
   // Floats (the output is STL): every point rounded as the file will hold
   // it, the points that become one merged; what that makes intersect is
@@ -1811,12 +1809,12 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   // The result is floats; what is left the certificate reports.
   for (int round = 0; o.float_coordinates; ++round) {
     std::vector<char> moved(result.soup.points.size(), 0);
-    for (std::size_t v = 0; v < result.soup.points.size(); ++v)
-      for (double& c : result.soup.points[v]) {
-        const double f = nearest_float(c);
-        moved[v] |= f != c;
-        c = f;
-      }
+    for (std::size_t v = 0; v < result.soup.points.size(); ++v) {
+      Point3d& p = result.soup.points[v];
+      const Point3d q = nearest_float(p);
+      moved[v] = q != p;
+      p = q;
+    }
     const std::size_t n = std::size_t(std::count(moved.begin(), moved.end(), char(1)));
     if (n == 0) break;
     r.float_rounded += n;
