@@ -22,10 +22,28 @@
 namespace polyheal {
 namespace {
 
+/// Text from the file, for an error message: in quotes, its first 40 bytes,
+/// each byte that is not printable ASCII as \xNN (the message stays one
+/// readable line whatever the file holds).
+std::string excerpt(std::string_view text) {
+  static const char* hex = "0123456789abcdef";
+  std::string out = "'";
+  for (unsigned char c : text.substr(0, 40)) {
+    if (c >= 0x20 && c < 0x7f) {
+      out += char(c);
+    } else {
+      out += "\\x";
+      out += hex[c >> 4];
+      out += hex[c & 15];
+    }
+  }
+  return out + (text.size() > 40 ? "...'" : "'");
+}
+
 /// Why a coordinate beyond kMaxCoordinate is refused.
 std::string beyond_range(std::string_view value) {
-  return "coordinate '" + std::string(value.substr(0, 40)) +
-         "' is beyond +-1e150, the range within which polyheal's distances and tolerances are finite";
+  return "coordinate " + excerpt(value) +
+         " is beyond +-1e150, the range within which polyheal's distances and tolerances are finite";
 }
 
 std::string lower(std::string s) {
@@ -93,10 +111,10 @@ struct Text {
     if (!s.empty() && s[0] == '+') s.remove_prefix(1);
     double v = 0;
     auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-    if (ec == std::errc::result_out_of_range) fail(std::string(what) + " '" + std::string(t) + "' is out of double range");
+    if (ec == std::errc::result_out_of_range) fail(std::string(what) + " " + excerpt(t) + " is out of double range");
     if (ec != std::errc() || ptr != s.data() + s.size() || s.empty())
-      fail(std::string("non-numeric ") + what + " '" + std::string(t.substr(0, 40)) + "'");
-    if (!std::isfinite(v)) fail(std::string("non-finite ") + what + " '" + std::string(t) + "'");
+      fail(std::string("non-numeric ") + what + " " + excerpt(t));
+    if (!std::isfinite(v)) fail(std::string("non-finite ") + what + " " + excerpt(t));
     if (std::string_view(what) == "coordinate" && std::fabs(v) > kMaxCoordinate) fail(beyond_range(t));
     return v;
   }
@@ -106,7 +124,7 @@ struct Text {
     long long v = 0;
     auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
     if (ec != std::errc() || ptr != s.data() + s.size() || s.empty())
-      fail(std::string("non-integer ") + what + " '" + std::string(t.substr(0, 40)) + "'");
+      fail(std::string("non-integer ") + what + " " + excerpt(t));
     return v;
   }
 };
@@ -251,8 +269,8 @@ Soup parse_off(std::string_view bytes, const std::string& name) {
   bool ok = std::any_of(std::begin(kHeaders), std::end(kHeaders), [&](const char* h) { return head == h; });
   if (!ok) {
     if (head.size() >= 3 && head.substr(head.size() - 3) == "OFF")
-      t.fail("unsupported OFF variant '" + std::string(head) + "' (only 3D OFF is read)");
-    t.fail("wrong header: expected 'OFF', found '" + std::string(head.substr(0, 40)) + "'");
+      t.fail("unsupported OFF variant " + excerpt(head) + " (only 3D OFF is read)");
+    t.fail("wrong header: expected 'OFF', found " + excerpt(head));
   }
   if (!t.at_eol()) {
     std::string_view peek = t.token();
@@ -329,7 +347,7 @@ Soup parse_obj(std::string_view bytes, const std::string& name) {
     } else if (kw.empty() || !std::all_of(kw.begin(), kw.end(), [](char c) {
                  return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
                })) {
-      t.fail("not an OBJ statement: '" + std::string(kw.substr(0, 40)) + "'");
+      t.fail("not an OBJ statement: " + excerpt(kw));
     }
     // vt, vn, vp, o, s, l, usemtl, mtllib, ...: not geometry we read.
     t.next_line();
@@ -377,7 +395,7 @@ Soup parse_stl_ascii(std::string_view bytes, const std::string& name) {
     t.skip_empty_lines();
     std::string_view got = t.token();
     if (got != word)
-      t.fail("expected '" + std::string(word) + "', found '" + std::string(got.substr(0, 40)) + "'");
+      t.fail("expected '" + std::string(word) + "', found " + excerpt(got));
   };
   bool any_solid = false;
   std::vector<std::string> solids;     // solid names (group names when there are several)
@@ -400,7 +418,7 @@ Soup parse_stl_ascii(std::string_view bytes, const std::string& name) {
         t.next_line();
         break;
       }
-      if (kw != "facet") t.fail("expected 'facet' or 'endsolid', found '" + std::string(kw.substr(0, 40)) + "'");
+      if (kw != "facet") t.fail("expected 'facet' or 'endsolid', found " + excerpt(kw));
       t.next_line();  // normal: ignored, recomputed from the vertices when needed
       expect("outer");
       t.next_line();
@@ -567,7 +585,7 @@ Soup parse_ply(std::string_view bytes, const std::string& name) {
       if (f == "ascii") format = ascii;
       else if (f == "binary_little_endian") format = le;
       else if (f == "binary_big_endian") format = be;
-      else t.fail("unknown PLY format '" + std::string(f) + "'");
+      else t.fail("unknown PLY format " + excerpt(f));
       have_format = true;
     } else if (kw == "element") {
       PlyElement e;
@@ -585,12 +603,12 @@ Soup parse_ply(std::string_view bytes, const std::string& name) {
         if (!ply_type(t.token_required("list count type"), p.count_type)) t.fail("unknown list count type");
         if (ply_type(t.token_required("list item type"), p.type) == false) t.fail("unknown list item type");
       } else if (!ply_type(ty, p.type)) {
-        t.fail("unknown property type '" + std::string(ty) + "'");
+        t.fail("unknown property type " + excerpt(ty));
       }
       p.name = std::string(t.token_required("property name"));
       elements.back().props.push_back(std::move(p));
     } else if (kw != "comment" && kw != "obj_info" && !kw.empty()) {
-      t.fail("unexpected header line '" + std::string(kw.substr(0, 40)) + "'");
+      t.fail("unexpected header line " + excerpt(kw));
     }
     t.next_line();
   }
@@ -605,7 +623,7 @@ Soup parse_ply(std::string_view bytes, const std::string& name) {
     unsigned long long min_record = 0;
     for (const PlyProperty& p : e.props) min_record += format == ascii ? 2 : ply_size(p.is_list ? p.count_type : p.type);
     if (min_record == 0) min_record = 1;
-    if (format == ascii) check_declared(t, e.count, min_record, ("'" + e.name + "' records").c_str());
+    if (format == ascii) check_declared(t, e.count, min_record, (excerpt(e.name) + " records").c_str());
   }
   if (!vert) throw InputError(name, "header", "PLY has no 'vertex' element");
   if (!face) throw InputError(name, "header", "PLY has no 'face' element");
@@ -633,8 +651,8 @@ Soup parse_ply(std::string_view bytes, const std::string& name) {
     for (const PlyElement& e : elements) {
       unsigned long long rec = 0;
       for (const PlyProperty& p : e.props) rec += ply_size(p.is_list ? p.count_type : p.type);
-      if (rec && e.count > left / rec) bin.fail("declares " + std::to_string(e.count) + " '" + e.name +
-                                                "' records but only " + std::to_string(left) + " bytes follow");
+      if (rec && e.count > left / rec) bin.fail("declares " + std::to_string(e.count) + " " + excerpt(e.name) +
+                                                " records but only " + std::to_string(left) + " bytes follow");
       need += e.count * rec;
       if (need > left) bin.fail("declared elements need at least " + std::to_string(need) + " bytes but only " +
                                 std::to_string(left) + " follow");
@@ -650,7 +668,7 @@ Soup parse_ply(std::string_view bytes, const std::string& name) {
       if (format == ascii) {
         t.skip_empty_lines();
         if (t.at_end()) t.fail("file ends after " + std::to_string(r) + " of " + std::to_string(e.count) +
-                               " '" + e.name + "' records");
+                               " " + excerpt(e.name) + " records");
       }
       Point3d pt{};
       for (std::size_t k = 0; k < e.props.size(); ++k) {
@@ -712,7 +730,7 @@ Soup parse_ply(std::string_view bytes, const std::string& name) {
       }
       if (is_vert) s.points.push_back(pt);
       if (format == ascii) {
-        if (!t.at_eol()) t.fail("extra values in '" + e.name + "' record");
+        if (!t.at_eol()) t.fail("extra values in " + excerpt(e.name) + " record");
         t.next_line();
       }
     }
