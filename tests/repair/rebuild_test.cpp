@@ -155,6 +155,34 @@ TEST_CASE("rebuild: a box of separate patches with gaps, overlaps, T-junctions a
   CHECK(std::abs(volume(raw.soup) - volume(out)) < 0.25 * r.cell * 600);
 }
 
+TEST_CASE("rebuild: decimating in two halves at once is decimating them one after the other", "[rebuild]") {
+  // Large surfaces are decimated in two halves at once, each a mesh of its
+  // own, joined again: the error each face carries, the facet and the
+  // sharpening of each vertex must cross into the halves and back (the
+  // error did not at first: 20% fewer faces, the surface farther from the
+  // extracted one than the tolerance lets it). Done one after the other on
+  // the whole surface, the same sweeps decide the same collapses: neither
+  // half reads what the other changes, and the joined mesh is built as the
+  // whole one is left (vertices and faces in their order: which of an
+  // edge's two vertex ids survives a collapse follows the mesh's halfedges,
+  // and the sweeps take the vertices in order).
+  const Soup in = read_soup(test::fixture("corpus/cgal__non_manifold_face_graph.off"));
+  RebuildOptions coarse, one_after_other, at_once;
+  coarse.decimate = false;
+  coarse.certify = one_after_other.certify = at_once.certify = false;
+  one_after_other.halves_in_parallel = false;
+  const RebuildResult before = rebuild(in, coarse), serial = rebuild(in, one_after_other),
+                      parallel = rebuild(in, at_once);
+  REQUIRE(before.soup.points.size() > 2 * 4096);  // swept in halves (from 4096 vertices) at every tolerance
+  REQUIRE(serial.soup.face_count() < before.soup.face_count() / 4);
+  // The same surface, point for point and face for face, in the same groups.
+  CHECK(parallel.soup.points == serial.soup.points);
+  CHECK(parallel.soup.indices == serial.soup.indices);
+  CHECK(parallel.soup.face_group == serial.soup.face_group);
+  CHECK(parallel.report.decimated == serial.report.decimated);
+  CHECK(inspect(parallel.soup).certified_clean());
+}
+
 TEST_CASE("rebuild: a cylinder with a missing strip from cap to cap", "[rebuild]") {
   const Soup in = cylinder(48, 6, 2.0, 5.0, {10, 11});  // a strip 30 degrees wide
   const Report rin = inspect(in);

@@ -7,6 +7,7 @@
 #include <CGAL/AABB_tree.h>
 #include <CGAL/intersections.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
@@ -1658,11 +1659,11 @@ class PlanarCoarsening {
 //     stays small (valence);
 //   - no new triangle is exactly degenerate, or turns more than 60 degrees
 //     from the face it replaces;
-//   - the error bound stays within the tolerance: each face carries a bound
-//     on how far the surface it replaced may be from it (the removed
-//     vertex's distance to the new fan, plus what the replaced faces
-//     carried) — a measurement in doubles; the report's Hausdorff distance
-//     is measured on the result;
+//   - the error estimate stays within the tolerance: each face carries an
+//     estimate of how far the surface it replaced may be from it (the
+//     removed vertex's distance to the new fan, plus what the replaced faces
+//     carried; not a bound, see try_collapse) — a measurement in doubles;
+//     the report's Hausdorff distance is measured on the result;
 //   - no new triangle intersects another face (the oracle's local query,
 //     exact).
 // Sweeps with growing thresholds (a quarter, half, all of the tolerance)
@@ -1783,18 +1784,26 @@ namespace {
 
 class BoundedDecimation {
  public:
-  /// `reference`: the extracted surface the result must stay near; `cell`:
-  /// the grid's cell (its triangles' size).
-  BoundedDecimation(Mesh& mesh, const Soup& reference, double tolerance, double cell, const KeptRegions& kept)
-      : mesh_(mesh), index_(mesh), reference_(reference, std::max(cell, tolerance)), tolerance_(tolerance),
-        kept_(kept) {
+  /// `reference`: the extracted surface the result must stay near;
+  /// `diagonal`: of the whole surface's points (TetGen's shortest edge,
+  /// which the guards keep, is relative to it). What earlier instances on
+  /// the mesh did stays with it: the error each face carries
+  /// ("f:rebuild_error") and the sharpened vertices ("v:rebuild_moved").
+  BoundedDecimation(Mesh& mesh, const TriangleGrid& reference, double tolerance, double diagonal,
+                    const KeptRegions& kept)
+      : mesh_(mesh), index_(mesh), reference_(reference), tolerance_(tolerance), kept_(kept), diagonal_(diagonal) {
     error_ = mesh_.add_property_map<face_descriptor, double>("f:rebuild_error", 0.0).first;
-    for (vertex_descriptor v : mesh_.vertices()) at_.push_back(nearest_point3d(mesh_.point(v)));
-    moved_.assign(at_.size(), 0);
-    Region all;
-    for (const Point3d& p : at_) grow(all, p, all.count++ == 0);
-    diagonal_ = at_.empty() ? 0 : dist(all.lo, all.hi);
+    moved_ = mesh_.add_property_map<vertex_descriptor, char>("v:rebuild_moved", 0).first;
+    facet_ = mesh_.add_property_map<vertex_descriptor, std::int64_t>("v:rebuild_facet", -1).first;
+    at_.resize(mesh_.number_of_vertices() + mesh_.number_of_removed_vertices());
+    for (vertex_descriptor v : mesh_.vertices()) at_[static_cast<std::size_t>(v)] = nearest_point3d(mesh_.point(v));
   }
+
+  /// Only vertices whose second ring lies on one side of an axis-aligned
+  /// plane (below it: coordinate < at; else >= at) collapse: all that
+  /// deciding and making a collapse reads and changes is there
+  /// (sweep_in_halves()).
+  void restrict_to(int axis, double at, bool below) { side_ = Side{axis, at, below}; }
 
   /// §5, Fig. 15 (crisper edges from the facets' normals): a vertex whose
   /// neighbourhood lies on facets of two planes meeting at more than the
@@ -1881,7 +1890,7 @@ class BoundedDecimation {
         at_[static_cast<std::size_t>(v)] = old;
         continue;
       }
-      moved_[static_cast<std::size_t>(v)] = 1;  // off the extracted surface now
+      moved_[v] = 1;  // off the extracted surface now
       index_.update(star);
       facet[v] = -1;  // on two planes now: it votes for no face group
       ++moved;
@@ -1889,20 +1898,14 @@ class BoundedDecimation {
     return moved;
   }
 
-  std::size_t run() {
-    std::size_t collapses = 0;
-    for (double fraction : {0.25, 0.5, 1.0}) {
-      const double limit = fraction * tolerance_;
-      for (std::size_t sweep = 0; sweep < 2; ++sweep) {
-        std::size_t made = 0;
-        std::vector<vertex_descriptor> all(mesh_.vertices().begin(), mesh_.vertices().end());
-        for (vertex_descriptor v : all)
-          if (!mesh_.is_removed(v) && try_collapse(v, limit)) ++made;
-        collapses += made;
-        if (made == 0) break;
-      }
-    }
-    return collapses;
+  /// Every vertex, in order, tries to collapse into a neighbour within
+  /// `limit`; returns the collapses made.
+  std::size_t sweep(double limit) {
+    std::size_t made = 0;
+    std::vector<vertex_descriptor> all(mesh_.vertices().begin(), mesh_.vertices().end());
+    for (vertex_descriptor v : all)
+      if (!mesh_.is_removed(v) && try_collapse(v, limit)) ++made;
+    return made;
   }
 
  private:
@@ -1929,8 +1932,27 @@ class BoundedDecimation {
 
   const Point3d& at(vertex_descriptor v) const { return at_[static_cast<std::size_t>(v)]; }
 
+  /// Whether v and its second ring lie on the side (restrict_to()): the
+  /// stars of v and of its neighbours, the faces the index finds near the
+  /// new fan (within v's first ring's box) and the guards' vertices are all
+  /// within it.
+  bool on_own_side(vertex_descriptor v) const {
+    if (!side_) return true;
+    auto in = [&](vertex_descriptor w) {
+      const double x = at(w)[side_->axis];
+      return side_->below ? x < side_->at : x >= side_->at;
+    };
+    if (!in(v)) return false;
+    for (vertex_descriptor x : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_)) {
+      if (!in(x)) return false;
+      for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(x), mesh_))
+        if (!in(w)) return false;
+    }
+    return true;
+  }
+
   bool try_collapse(vertex_descriptor v, double limit) {
-    if (kept_.frozen(at(v))) return false;
+    if (kept_.frozen(at(v)) || !on_own_side(v)) return false;
     std::vector<face_descriptor>& star = star_;  // scratch buffers, reused: most calls make no collapse
     star.clear();
     double carried = 0, old_quality = HUGE_VAL;
@@ -1995,10 +2017,15 @@ class BoundedDecimation {
           if ((x == c.proposed[i][0] || x == c.proposed[i][2]) && folded(n, m)) ok = false;
       }
       if (!ok || c.proposed.empty()) continue;
-      // Old star to new fan: the distance to the fan is convex on each old
-      // triangle, so its largest value is at a corner — v (d2), plus what
-      // the star's faces carried. New fan to the surface: sampled against
-      // the extracted surface itself below (no accumulation).
+      // Old star to new fan: estimated as v's distance to the fan plus
+      // what the star's faces carried — an estimate, not a bound: the
+      // distance to the fan is not convex on the old triangles (measured on
+      // non_manifold_face_graph: points of the surface before decimation up
+      // to 9% beyond the tolerance from the result; a bound — the star's and
+      // the fan's height gap over their common polygon — left 37-72% more
+      // faces). The report's distances are measured on the result. New fan
+      // to the surface: sampled against the extracted surface itself below
+      // (no accumulation).
       c.error = carried + std::sqrt(d2);
       // Never make the worst triangle much worse than the star's (needles
       // are what TetGen and users stumble on).
@@ -2197,8 +2224,7 @@ class BoundedDecimation {
       const Point3d &p = at(t[0]), &q = at(t[1]), &w = at(t[2]);
       // Every point of a triangle is within its longest edge of each corner:
       // a small triangle with its corners on the surface needs no samples.
-      if (!moved_[static_cast<std::size_t>(t[0])] && !moved_[static_cast<std::size_t>(t[1])] &&
-          !moved_[static_cast<std::size_t>(t[2])]) {
+      if (!moved_[t[0]] && !moved_[t[1]] && !moved_[t[2]]) {
         auto d2 = [](const Point3d& x, const Point3d& y) {
           return (x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2]);
         };
@@ -2218,12 +2244,16 @@ class BoundedDecimation {
     const vertex_descriptor u = mesh_.target(c.h);
     const Point keep = mesh_.point(u);
     const Point3d keep_at = at(u);
+    const std::int64_t keep_facet = facet_[u];
+    const char keep_moved = moved_[u];
     // the two faces on the collapsed edge go; the others keep their leaves
     for (halfedge_descriptor h : {c.h, mesh_.opposite(c.h)})
       if (!mesh_.is_border(h)) index_.remove(mesh_.face(h));
     const vertex_descriptor kept = CGAL::Euler::collapse_edge(mesh_.edge(c.h), mesh_);
-    mesh_.point(kept) = keep;
+    mesh_.point(kept) = keep;  // kept is v or u (Euler::collapse_edge keeps the target of the edge's halfedge)
     at_[static_cast<std::size_t>(kept)] = keep_at;
+    facet_[kept] = keep_facet;  // what the vertex knows goes with its point
+    moved_[kept] = keep_moved;
     std::vector<face_descriptor> changed;
     for (face_descriptor f : CGAL::faces_around_target(mesh_.halfedge(kept), mesh_)) {
       changed.push_back(f);
@@ -2232,15 +2262,23 @@ class BoundedDecimation {
     index_.update(changed);
   }
 
+  struct Side {
+    int axis;
+    double at;
+    bool below;
+  };
+
   Mesh& mesh_;
   LocalIndex index_;
-  TriangleGrid reference_;
+  const TriangleGrid& reference_;
   double tolerance_;
   const KeptRegions& kept_;  // their points never move
-  std::vector<char> moved_;  // per vertex: sharpened, so no longer on the extracted surface
+  double diagonal_;          // of the surface's points: bounds every edge
+  std::optional<Side> side_;
+  Mesh::Property_map<vertex_descriptor, char> moved_;  // sharpened, so no longer on the extracted surface
+  Mesh::Property_map<vertex_descriptor, std::int64_t> facet_;  // the input facet a vertex lies on (-1: none)
   Mesh::Property_map<face_descriptor, double> error_;
   std::vector<Point3d> at_;
-  double diagonal_ = 0;  // of the points' bounding box: bounds every edge
   // try_collapse's scratch buffers
   std::vector<vertex_descriptor> guarded_, outer_;  // guarded()'s vertices, the fan's outer ones
   Point3d fan_lo_{}, fan_hi_{};                     // and the fan's box
@@ -2250,6 +2288,193 @@ class BoundedDecimation {
   std::vector<Point3d> ring_;
   std::vector<char> removed_;
 };
+
+/// The decimation's data on a mesh's elements, carried when the mesh is
+/// built anew: the input facet a vertex lies on, whether it was sharpened,
+/// the error each face carries.
+struct DecimationData {
+  Mesh::Property_map<vertex_descriptor, std::int64_t> facet;
+  Mesh::Property_map<vertex_descriptor, char> moved;
+  Mesh::Property_map<face_descriptor, double> error;
+  explicit DecimationData(Mesh& m)
+      : facet(m.add_property_map<vertex_descriptor, std::int64_t>("v:rebuild_facet", -1).first),
+        moved(m.add_property_map<vertex_descriptor, char>("v:rebuild_moved", 0).first),
+        error(m.add_property_map<face_descriptor, double>("f:rebuild_error", 0.0).first) {}
+};
+
+template <class Element>
+using Of = std::pair<int, Element>;  // an element of parts[first]
+
+/// A mesh of the given vertices and faces of `parts`, in the order given,
+/// with their DecimationData; `corner(v)`: the vertex among `vertices` that
+/// a face's corner v stands for. Nothing when a face cannot be added (the
+/// faces do not make a manifold surface).
+template <class Corner>
+std::optional<Mesh> assemble(const std::vector<Mesh*>& parts, const std::vector<Of<vertex_descriptor>>& vertices,
+                             const std::vector<Of<face_descriptor>>& faces, Corner corner) {
+  Mesh out;
+  DecimationData data(out);
+  std::vector<DecimationData> from;
+  std::vector<std::vector<vertex_descriptor>> to;
+  for (Mesh* m : parts) {
+    from.emplace_back(*m);
+    to.emplace_back(m->number_of_vertices() + m->number_of_removed_vertices(), Mesh::null_vertex());
+  }
+  for (const auto& [s, v] : vertices) {
+    const vertex_descriptor w = out.add_vertex(parts[std::size_t(s)]->point(v));
+    to[std::size_t(s)][static_cast<std::size_t>(v)] = w;
+    data.facet[w] = from[std::size_t(s)].facet[v];
+    data.moved[w] = from[std::size_t(s)].moved[v];
+  }
+  for (const auto& [s, f] : faces) {
+    const Mesh& m = *parts[std::size_t(s)];
+    std::array<vertex_descriptor, 3> t;
+    std::size_t k = 0;
+    for (vertex_descriptor v : CGAL::vertices_around_face(m.halfedge(f), m)) {
+      const Of<vertex_descriptor> c = corner(Of<vertex_descriptor>{s, v});
+      t[k++] = to[std::size_t(c.first)][static_cast<std::size_t>(c.second)];
+    }
+    const face_descriptor g = out.add_face(t[0], t[1], t[2]);
+    if (g == Mesh::null_face()) return std::nullopt;
+    data.error[g] = from[std::size_t(s)].error[f];
+  }
+  return out;
+}
+
+/// The mesh without its removed elements, the others in their order:
+/// Surface_mesh::collect_garbage moves the last elements into the gaps,
+/// and the sweeps, which take the vertices in the mesh's order, would go
+/// otherwise.
+void compact(Mesh& mesh) {
+  std::vector<Of<vertex_descriptor>> vertices;
+  std::vector<Of<face_descriptor>> faces;
+  for (vertex_descriptor v : mesh.vertices()) vertices.emplace_back(0, v);
+  for (face_descriptor f : mesh.faces()) faces.emplace_back(0, f);
+  std::optional<Mesh> out = assemble({&mesh}, vertices, faces, [](const Of<vertex_descriptor>& c) { return c; });
+  if (out) mesh = std::move(*out);
+  else mesh.collect_garbage();  // never seen: the decimation keeps the surface manifold
+}
+
+/// A sweep of the decimation (the first, at a quarter of the tolerance,
+/// makes two thirds of its collapses) on the two halves of the surface at
+/// once. The points are split at their median along the longest side of
+/// their box; each half is a mesh of the faces with a corner on its side,
+/// where a vertex collapses only if its second ring lies on that side
+/// (restrict_to(): all a collapse reads and changes). So neither half reads
+/// what the other changes, the faces across the plane stay as they are in
+/// both, and the two are joined again — vertices and faces in their order
+/// in the mesh, which is what the same sweeps make of it one after the other
+/// (`parallel` false, for tests: the result, and so the sweeps after it,
+/// do not depend on the number of threads). Vertices near the plane are
+/// left to the sweep that follows on the whole surface. Returns the
+/// collapses made; nothing, the mesh as it was, for a surface too small to
+/// split or — never seen — halves that cannot be joined.
+std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& reference, double tolerance,
+                                           double diagonal, const KeptRegions& kept, double limit, bool parallel) {
+  constexpr std::size_t kSplitFrom = 4096;  // vertices: below, a sweep costs little
+  const std::size_t n = mesh.number_of_vertices();
+  if (n < kSplitFrom || mesh.number_of_removed_vertices() > 0) return std::nullopt;
+  std::vector<Point3d> at(n);
+  Region box;
+  for (vertex_descriptor v : mesh.vertices()) {
+    at[static_cast<std::size_t>(v)] = nearest_point3d(mesh.point(v));
+    grow(box, at[static_cast<std::size_t>(v)], box.count++ == 0);
+  }
+  int axis = 0;
+  for (int k = 1; k < 3; ++k)
+    if (box.hi[k] - box.lo[k] > box.hi[axis] - box.lo[axis]) axis = k;
+  std::vector<double> coordinate(n);
+  for (std::size_t v = 0; v < n; ++v) coordinate[v] = at[v][axis];
+  std::nth_element(coordinate.begin(), coordinate.begin() + std::ptrdiff_t(n / 2), coordinate.end());
+  const double middle = coordinate[n / 2];
+  if (!parallel) {
+    BoundedDecimation decimation(mesh, reference, tolerance, diagonal, kept);
+    std::size_t made = 0;
+    for (bool below : {true, false}) {
+      decimation.restrict_to(axis, middle, below);
+      made += decimation.sweep(limit);
+    }
+    compact(mesh);
+    return made;
+  }
+
+  // half[s]'s vertex i is mesh vertex vertices[s][i] and its face i mesh
+  // face faces[s][i] (as built; a collapse keeps the ids it re-attaches)
+  std::vector<Of<vertex_descriptor>> vertices[2];
+  std::vector<Of<face_descriptor>> faces[2];
+  std::optional<Mesh> half[2];
+  for (int s = 0; s < 2; ++s) {
+    std::vector<char> used(n, 0);
+    for (face_descriptor f : mesh.faces()) {
+      bool here = false;
+      for (vertex_descriptor v : CGAL::vertices_around_face(mesh.halfedge(f), mesh))
+        here = here || (at[static_cast<std::size_t>(v)][axis] < middle) == (s == 0);
+      if (!here) continue;
+      faces[s].emplace_back(0, f);
+      for (vertex_descriptor v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) used[static_cast<std::size_t>(v)] = 1;
+    }
+    for (vertex_descriptor v : mesh.vertices())
+      if (used[static_cast<std::size_t>(v)]) vertices[s].emplace_back(0, v);
+    half[s] = assemble({&mesh}, vertices[s], faces[s], [](const Of<vertex_descriptor>& c) { return c; });
+    if (!half[s]) return std::nullopt;
+  }
+
+  std::size_t made[2] = {0, 0};
+  auto run_half = [&](int s) {
+    BoundedDecimation decimation(*half[s], reference, tolerance, diagonal, kept);
+    decimation.restrict_to(axis, middle, s == 0);
+    made[s] = decimation.sweep(limit);
+  };
+  tbb::parallel_invoke([&] { run_half(0); }, [&] { run_half(1); });
+
+  // Join: each mesh vertex from the half that still has it (one in both is
+  // a corner of a face across the plane, which neither half changed; a
+  // collapse's kept vertex may be either end's: ids stay unique), each
+  // mesh face from the half that has it (the first, for a face across).
+  std::vector<Of<vertex_descriptor>> by_vertex(n, {-1, Mesh::null_vertex()});
+  std::vector<Of<face_descriptor>> by_face(mesh.number_of_faces() + mesh.number_of_removed_faces(),
+                                           {-1, Mesh::null_face()});
+  for (int s = 1; s >= 0; --s) {
+    for (vertex_descriptor v : half[s]->vertices())
+      by_vertex[static_cast<std::size_t>(vertices[s][static_cast<std::size_t>(v)].second)] = {s, v};
+    for (face_descriptor f : half[s]->faces())
+      by_face[static_cast<std::size_t>(faces[s][static_cast<std::size_t>(f)].second)] = {s, f};
+  }
+  std::vector<Of<vertex_descriptor>> joined_vertices;
+  std::vector<Of<face_descriptor>> joined_faces;
+  for (const auto& e : by_vertex)
+    if (e.first >= 0) joined_vertices.push_back(e);
+  for (const auto& e : by_face)
+    if (e.first >= 0) joined_faces.push_back(e);
+  std::optional<Mesh> joined =
+      assemble({&*half[0], &*half[1]}, joined_vertices, joined_faces, [&](const Of<vertex_descriptor>& c) {
+        return by_vertex[static_cast<std::size_t>(vertices[c.first][static_cast<std::size_t>(c.second)].second)];
+      });
+  if (!joined) return std::nullopt;
+  mesh = std::move(*joined);
+  return made[0] + made[1];
+}
+
+/// The bounded decimation: sweeps at a quarter, half and all of the
+/// tolerance (the cheapest collapses first), the first at each in halves
+/// (sweep_in_halves()), a second on the whole surface when the first made
+/// a collapse (what the first left, and the vertices near the halves'
+/// plane). Returns the collapses made.
+std::size_t decimate(Mesh& mesh, const TriangleGrid& reference, double tolerance, double diagonal,
+                     const KeptRegions& kept, bool halves_in_parallel) {
+  std::size_t collapses = 0;
+  for (double fraction : {0.25, 0.5, 1.0}) {
+    const double limit = fraction * tolerance;
+    const std::optional<std::size_t> in_halves =
+        sweep_in_halves(mesh, reference, tolerance, diagonal, kept, limit, halves_in_parallel);
+    BoundedDecimation decimation(mesh, reference, tolerance, diagonal, kept);
+    const std::size_t made = in_halves ? *in_halves : decimation.sweep(limit);
+    collapses += made;
+    if (made > 0) collapses += decimation.sweep(limit);
+    compact(mesh);  // sweep_in_halves() takes a mesh without removed elements
+  }
+  return collapses;
+}
 
 // ---------------------------------------------------------------------------
 // §3.2.4: output faces grouped by the input group of their vertices' facets
@@ -2944,12 +3169,18 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     for (std::size_t v = 0; v < vertices.size(); ++v) facet_at.emplace(out.points[v], vertices[v].facet);
     auto facet = mesh.add_property_map<vertex_descriptor, std::int64_t>("v:rebuild_facet", -1).first;
     for (vertex_descriptor v : mesh.vertices()) facet[v] = facet_at.at(nearest_point3d(mesh.point(v)));
-    BoundedDecimation decimation(mesh, extracted, options.decimate_tolerance * r.cell, r.cell, kept);
-    if (options.sharpen)
+    const double tolerance = options.decimate_tolerance * r.cell;
+    const TriangleGrid reference(extracted, std::max(r.cell, tolerance));
+    Region points;
+    for (const Point3d& p : out.points) grow(points, p, points.count++ == 0);
+    const double diagonal = dist(points.lo, points.hi);
+    if (options.sharpen) {
+      BoundedDecimation sharpening(mesh, reference, tolerance, diagonal, kept);
       r.sharpened =
-          decimation.sharpen(f, input_surface, facet, 0.75 * r.cell, std::cos(options.feature_angle * M_PI / 180));
-    r.decimated = decimation.run();
-    mesh.collect_garbage();
+          sharpening.sharpen(f, input_surface, facet, 0.75 * r.cell, std::cos(options.feature_angle * M_PI / 180));
+    }
+    r.decimated = decimate(mesh, reference, tolerance, diagonal, kept, options.halves_in_parallel);
+    facet = mesh.property_map<vertex_descriptor, std::int64_t>("v:rebuild_facet").first;
     // Collapses keep a vertex's facet with its point.
     facet_at.clear();
     for (vertex_descriptor v : mesh.vertices()) facet_at[nearest_point3d(mesh.point(v))] = facet[v];

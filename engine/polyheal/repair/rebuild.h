@@ -84,6 +84,10 @@ struct RebuildOptions {
   bool simplify = true;        // collapse vertices inside planar regions (exact, surface unchanged)
   bool decimate = true;        // then collapse vertices elsewhere, within decimate_tolerance (see below)
   double decimate_tolerance = 0.25;  // fraction of the cell: distance of new faces to the extracted surface
+  /// Large surfaces are decimated in two halves at once (rebuild.cpp,
+  /// sweep_in_halves()); false: the halves' sweeps one after the other on the
+  /// whole surface — the same result, slower (for tests).
+  bool halves_in_parallel = true;
   bool sharpen = true;         // move vertices near sharp edges and corners onto them (before decimating)
   bool certify = true;         // inspect the result and measure the Hausdorff distance
   std::size_t max_cells = 20'000'000;  // refuse a finer grid (UnsupportedInput)
