@@ -1782,19 +1782,29 @@ Meeting nearest_on_planes_line(const Triangle3d& a, const Triangle3d& b, const P
 
 namespace {
 
+/// The decimation's data on a mesh's elements, carried when the mesh is
+/// built anew: the input facet a vertex lies on, whether it was sharpened,
+/// the error each face carries (sharpen() and the collapses set them).
+struct DecimationData {
+  Mesh::Property_map<vertex_descriptor, std::int64_t> facet;
+  Mesh::Property_map<vertex_descriptor, char> moved;
+  Mesh::Property_map<face_descriptor, double> error;
+  explicit DecimationData(Mesh& m)
+      : facet(m.add_property_map<vertex_descriptor, std::int64_t>("v:rebuild_facet", -1).first),
+        moved(m.add_property_map<vertex_descriptor, char>("v:rebuild_moved", 0).first),
+        error(m.add_property_map<face_descriptor, double>("f:rebuild_error", 0.0).first) {}
+};
+
 class BoundedDecimation {
  public:
   /// `reference`: the extracted surface the result must stay near;
   /// `diagonal`: of the whole surface's points (TetGen's shortest edge,
   /// which the guards keep, is relative to it). What earlier instances on
-  /// the mesh did stays with it: the error each face carries
-  /// ("f:rebuild_error") and the sharpened vertices ("v:rebuild_moved").
+  /// the mesh did stays with it (DecimationData).
   BoundedDecimation(Mesh& mesh, const TriangleGrid& reference, double tolerance, double diagonal,
                     const KeptRegions& kept)
-      : mesh_(mesh), index_(mesh), reference_(reference), tolerance_(tolerance), kept_(kept), diagonal_(diagonal) {
-    error_ = mesh_.add_property_map<face_descriptor, double>("f:rebuild_error", 0.0).first;
-    moved_ = mesh_.add_property_map<vertex_descriptor, char>("v:rebuild_moved", 0).first;
-    facet_ = mesh_.add_property_map<vertex_descriptor, std::int64_t>("v:rebuild_facet", -1).first;
+      : mesh_(mesh), index_(mesh), reference_(reference), tolerance_(tolerance), kept_(kept), diagonal_(diagonal),
+        data_(mesh) {
     at_.resize(mesh_.number_of_vertices() + mesh_.number_of_removed_vertices());
     for (vertex_descriptor v : mesh_.vertices()) at_[static_cast<std::size_t>(v)] = nearest_point3d(mesh_.point(v));
   }
@@ -1816,8 +1826,7 @@ class BoundedDecimation {
   /// (the oracle's local query). Cube-marching chamfers become edges.
   /// `input`: the facets of `f`. The edge or corner must be one of the
   /// input's: the target lies on it.
-  std::size_t sharpen(const Facets& f, const detail::SurfaceDistance& input,
-                      Mesh::Property_map<vertex_descriptor, std::int64_t>& facet, double reach, double cos_feature) {
+  std::size_t sharpen(const Facets& f, const detail::SurfaceDistance& input, double reach, double cos_feature) {
     const double on_input = 0.05 * reach;
     const double cos_same = std::cos(10 * M_PI / 180);
     const std::vector<Point3d> unit = unit_normals(f);
@@ -1827,7 +1836,7 @@ class BoundedDecimation {
       if (kept_.frozen(at(v))) continue;
       std::vector<std::int64_t> planes;
       auto consider = [&](vertex_descriptor u) {
-        const std::int64_t t = facet[u];
+        const std::int64_t t = data_.facet[u];
         if (t < 0) return;
         for (std::int64_t p : planes)
           if (dot(unit[std::size_t(p)], unit[std::size_t(t)]) > cos_same) return;
@@ -1890,9 +1899,9 @@ class BoundedDecimation {
         at_[static_cast<std::size_t>(v)] = old;
         continue;
       }
-      moved_[v] = 1;  // off the extracted surface now
+      data_.moved[v] = 1;  // off the extracted surface now
       index_.update(star);
-      facet[v] = -1;  // on two planes now: it votes for no face group
+      data_.facet[v] = -1;  // on two planes now: it votes for no face group
       ++moved;
     }
     return moved;
@@ -1959,7 +1968,7 @@ class BoundedDecimation {
     for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
       const face_descriptor f = mesh_.face(g);
       star.push_back(f);
-      carried = std::max(carried, error_[f]);
+      carried = std::max(carried, data_.error[f]);
       old_quality = std::min(old_quality, min_angle_quality(at(mesh_.source(g)), at(v), at(mesh_.target(mesh_.next(g)))));
     }
     if (carried >= limit) return false;
@@ -2224,7 +2233,7 @@ class BoundedDecimation {
       const Point3d &p = at(t[0]), &q = at(t[1]), &w = at(t[2]);
       // Every point of a triangle is within its longest edge of each corner:
       // a small triangle with its corners on the surface needs no samples.
-      if (!moved_[t[0]] && !moved_[t[1]] && !moved_[t[2]]) {
+      if (!data_.moved[t[0]] && !data_.moved[t[1]] && !data_.moved[t[2]]) {
         auto d2 = [](const Point3d& x, const Point3d& y) {
           return (x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2]);
         };
@@ -2244,20 +2253,20 @@ class BoundedDecimation {
     const vertex_descriptor u = mesh_.target(c.h);
     const Point keep = mesh_.point(u);
     const Point3d keep_at = at(u);
-    const std::int64_t keep_facet = facet_[u];
-    const char keep_moved = moved_[u];
+    const std::int64_t keep_facet = data_.facet[u];
+    const char keep_moved = data_.moved[u];
     // the two faces on the collapsed edge go; the others keep their leaves
     for (halfedge_descriptor h : {c.h, mesh_.opposite(c.h)})
       if (!mesh_.is_border(h)) index_.remove(mesh_.face(h));
     const vertex_descriptor kept = CGAL::Euler::collapse_edge(mesh_.edge(c.h), mesh_);
     mesh_.point(kept) = keep;  // kept is v or u (Euler::collapse_edge keeps the target of the edge's halfedge)
     at_[static_cast<std::size_t>(kept)] = keep_at;
-    facet_[kept] = keep_facet;  // what the vertex knows goes with its point
-    moved_[kept] = keep_moved;
+    data_.facet[kept] = keep_facet;  // what the vertex knows goes with its point
+    data_.moved[kept] = keep_moved;
     std::vector<face_descriptor> changed;
     for (face_descriptor f : CGAL::faces_around_target(mesh_.halfedge(kept), mesh_)) {
       changed.push_back(f);
-      error_[f] = std::max(error_[f], c.error);
+      data_.error[f] = std::max(data_.error[f], c.error);
     }
     index_.update(changed);
   }
@@ -2275,9 +2284,7 @@ class BoundedDecimation {
   const KeptRegions& kept_;  // their points never move
   double diagonal_;          // of the surface's points: bounds every edge
   std::optional<Side> side_;
-  Mesh::Property_map<vertex_descriptor, char> moved_;  // sharpened, so no longer on the extracted surface
-  Mesh::Property_map<vertex_descriptor, std::int64_t> facet_;  // the input facet a vertex lies on (-1: none)
-  Mesh::Property_map<face_descriptor, double> error_;
+  DecimationData data_;  // moved: sharpened, so no longer on the extracted surface
   std::vector<Point3d> at_;
   // try_collapse's scratch buffers
   std::vector<vertex_descriptor> guarded_, outer_;  // guarded()'s vertices, the fan's outer ones
@@ -2287,19 +2294,6 @@ class BoundedDecimation {
   std::vector<std::pair<vertex_descriptor, Point3d>> beyond_;
   std::vector<Point3d> ring_;
   std::vector<char> removed_;
-};
-
-/// The decimation's data on a mesh's elements, carried when the mesh is
-/// built anew: the input facet a vertex lies on, whether it was sharpened,
-/// the error each face carries.
-struct DecimationData {
-  Mesh::Property_map<vertex_descriptor, std::int64_t> facet;
-  Mesh::Property_map<vertex_descriptor, char> moved;
-  Mesh::Property_map<face_descriptor, double> error;
-  explicit DecimationData(Mesh& m)
-      : facet(m.add_property_map<vertex_descriptor, std::int64_t>("v:rebuild_facet", -1).first),
-        moved(m.add_property_map<vertex_descriptor, char>("v:rebuild_moved", 0).first),
-        error(m.add_property_map<face_descriptor, double>("f:rebuild_error", 0.0).first) {}
 };
 
 template <class Element>
@@ -2467,6 +2461,7 @@ std::size_t decimate(Mesh& mesh, const TriangleGrid& reference, double tolerance
     const double limit = fraction * tolerance;
     const std::optional<std::size_t> in_halves =
         sweep_in_halves(mesh, reference, tolerance, diagonal, kept, limit, halves_in_parallel);
+    if (in_halves == std::size_t(0)) continue;  // no second sweep; the joined mesh has nothing removed
     BoundedDecimation decimation(mesh, reference, tolerance, diagonal, kept);
     const std::size_t made = in_halves ? *in_halves : decimation.sweep(limit);
     collapses += made;
@@ -3167,7 +3162,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     soup_to_mesh(out, mesh);
     std::map<Point3d, std::int64_t> facet_at;
     for (std::size_t v = 0; v < vertices.size(); ++v) facet_at.emplace(out.points[v], vertices[v].facet);
-    auto facet = mesh.add_property_map<vertex_descriptor, std::int64_t>("v:rebuild_facet", -1).first;
+    auto facet = DecimationData(mesh).facet;
     for (vertex_descriptor v : mesh.vertices()) facet[v] = facet_at.at(nearest_point3d(mesh.point(v)));
     const double tolerance = options.decimate_tolerance * r.cell;
     const TriangleGrid reference(extracted, std::max(r.cell, tolerance));
@@ -3177,10 +3172,10 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     if (options.sharpen) {
       BoundedDecimation sharpening(mesh, reference, tolerance, diagonal, kept);
       r.sharpened =
-          sharpening.sharpen(f, input_surface, facet, 0.75 * r.cell, std::cos(options.feature_angle * M_PI / 180));
+          sharpening.sharpen(f, input_surface, 0.75 * r.cell, std::cos(options.feature_angle * M_PI / 180));
     }
     r.decimated = decimate(mesh, reference, tolerance, diagonal, kept, options.halves_in_parallel);
-    facet = mesh.property_map<vertex_descriptor, std::int64_t>("v:rebuild_facet").first;
+    facet = DecimationData(mesh).facet;  // decimate() built the mesh anew
     // Collapses keep a vertex's facet with its point.
     facet_at.clear();
     for (vertex_descriptor v : mesh.vertices()) facet_at[nearest_point3d(mesh.point(v))] = facet[v];
