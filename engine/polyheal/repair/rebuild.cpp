@@ -549,8 +549,16 @@ class Extractor {
     const K::FT lo(kClamp), hi(1 - kClamp);
     out.clamped = best_t < lo || best_t > hi;
     const K::FT t = best_t < lo ? lo : (best_t > hi ? hi : best_t);
-    for (int x = 0; x < 3; ++x)
-      if (A[x] != B[x]) out.p[x] = CGAL::to_double(K::FT(A[x]) + t * (K::FT(B[x]) - K::FT(A[x])));
+    const Tri& tr = f_.tris[std::size_t(best)];
+    for (int x = 0; x < 3; ++x) {
+      if (A[x] == B[x]) continue;
+      // On a facet perpendicular to axis x, the crossing's x is the facet's,
+      // exactly (a CAD part's axis-aligned faces; computed, a crossing at 0
+      // is an interval about 0 that only the exact value decides).
+      const double c = f_.points[tr[0]][x];
+      if (!out.clamped && f_.points[tr[1]][x] == c && f_.points[tr[2]][x] == c) out.p[x] = c;
+      else out.p[x] = CGAL::to_double(K::FT(A[x]) + t * (K::FT(B[x]) - K::FT(A[x])));
+    }
     return out;
   }
 
