@@ -240,6 +240,7 @@ TEST_CASE("predicates: segment-segment and point-triangle distance tests equal e
       const double t = std::sqrt(CGAL::to_double(s2)) * f;
       INFO("degenerate case " << i << " factor " << f);
       CHECK(point_closer_than_to_triangle(p, a, b, a, t) == (s2 < Kernel::FT(t) * Kernel::FT(t)));
+      CHECK(segments_closer_than(p, p, a, b, t) == (s2 < Kernel::FT(t) * Kernel::FT(t)));  // a point: no common normal
     }
   }
 }

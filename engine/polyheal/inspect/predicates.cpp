@@ -345,8 +345,10 @@ void cross3(const double* x, const double* y, double* z) {
 
 /// Segments ab and cd certainly farther apart than `tol`, separated along an
 /// axis, either segment's direction, their common normal or the normal to
-/// either within their common plane. Most pairs a box search meets are
-/// decided here.
+/// either within their common plane. When there is no common normal (a
+/// point, a == b, or parallel segments), the plane is the one through cd
+/// and a, and the normal to cd within it is the direction of the distance
+/// from a point to a line. Most pairs a box search meets are decided here.
 bool static_segments_apart(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& d, double tol) {
   if (!(tol > 0)) return false;
   const double m = max_abs({&a, &b, &c, &d});
@@ -356,6 +358,10 @@ bool static_segments_apart(const Point3d& a, const Point3d& b, const Point3d& c,
     w[k] = d[k] - c[k];
   }
   cross3(v, w, n);
+  if (n[0] == 0 && n[1] == 0 && n[2] == 0) {
+    const double ca[3] = {a[0] - c[0], a[1] - c[1], a[2] - c[2]};
+    cross3(w, ca, n);
+  }
   cross3(v, n, u1);
   cross3(w, n, u2);
   static const double axes[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
