@@ -1602,32 +1602,36 @@ class PlanarCoarsening {
       if (o == CGAL::ZERO || (star != CGAL::ZERO && o != star)) return SMesh::null_vertex();
       star = o;
     }
-    // The best neighbour: every new triangle keeps the orientation; the
-    // largest smallest angle (a measurement).
-    double best_quality = -1;
-    SMesh::Halfedge_index best;
+    // The best neighbour: the largest smallest angle (a measurement) of
+    // those whose every new triangle keeps the orientation. The neighbours
+    // are tried from the best down (stable: the first of equals), so the
+    // predicates are asked only until one passes.
+    std::vector<std::pair<double, SMesh::Halfedge_index>>& candidates = candidates_;
+    candidates.clear();
     for (auto h : CGAL::halfedges_around_source(v, mesh_)) {  // h: v -> u
       const SVertex u = mesh_.target(h);
       if (ring.size() + mesh_.degree(u) > kMaxValence + 4) continue;  // fans stay small (and quick)
       double quality = HUGE_VAL;
-      bool ok = true;
-      for (auto g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {  // face (source(g), v, next)
-        const SVertex a = mesh_.source(g), c = mesh_.target(mesh_.next(g));
-        if (a == u || c == u) continue;  // the two faces the collapse removes
-        const Point3d pa = pt(mesh_.point(a)), pu = pt(mesh_.point(u)), pc = pt(mesh_.point(c));
-        if (orient2(axis, pa, pu, pc) != star || is_nearly_degenerate(pa, pu, pc, tetgen_epsilon_) ||
-            corner_near_side(pa, pu, pc)) {
-          ok = false;
-          break;
-        }
+      for_new_triangles(v, u, [&](const Point3d& pa, const Point3d& pu, const Point3d& pc) {
         quality = std::min(quality, min_angle_quality(pa, pu, pc));
-      }
-      if (ok && quality > best_quality && CGAL::Euler::does_satisfy_link_condition(mesh_.edge(h), mesh_)) {
-        best_quality = quality;
+        return true;
+      });
+      if (quality >= 0) candidates.emplace_back(quality, h);  // (not NaN)
+    }
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
+    SMesh::Halfedge_index best;
+    for (const auto& [quality, h] : candidates) {
+      const bool ok = for_new_triangles(v, mesh_.target(h), [&](const Point3d& pa, const Point3d& pu, const Point3d& pc) {
+        return orient2(axis, pa, pu, pc) == star && !is_nearly_degenerate(pa, pu, pc, tetgen_epsilon_) &&
+               !corner_near_side(pa, pu, pc);
+      });
+      if (ok && CGAL::Euler::does_satisfy_link_condition(mesh_.edge(h), mesh_)) {
         best = h;
+        break;
       }
     }
-    if (best_quality < 0) return SMesh::null_vertex();
+    if (best == SMesh::null_halfedge()) return SMesh::null_vertex();
     const SVertex u = mesh_.target(best);
     const IPoint keep = mesh_.point(u);
     // collapse_edge keeps one of the two vertices; put u's point on it.
@@ -1636,6 +1640,19 @@ class PlanarCoarsening {
     facet_[kept] = facet_[u];
     on_plane_[kept] = 1;
     return kept;
+  }
+
+  /// Calls `test(a, u, c)` on each triangle the collapse v -> u makes (the
+  /// faces (a, v, c) round v with u for v, but the two it removes) while it
+  /// returns true; whether all passed.
+  template <class Test>
+  bool for_new_triangles(SVertex v, SVertex u, Test test) const {
+    for (auto g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
+      const SVertex a = mesh_.source(g), c = mesh_.target(mesh_.next(g));
+      if (a == u || c == u) continue;
+      if (!test(pt(mesh_.point(a)), pt(mesh_.point(u)), pt(mesh_.point(c)))) return false;
+    }
+    return true;
   }
 
   /// A corner within TetGen's shortest edge of the opposite side: then it
@@ -1655,6 +1672,7 @@ class PlanarCoarsening {
   const Facets& f_;
   std::vector<char> on_plane_;
   std::unordered_map<std::uint64_t, bool> coplanar_;
+  std::vector<std::pair<double, SMesh::Halfedge_index>> candidates_;  // try_collapse's, reused
   SMesh mesh_;
   std::vector<std::int64_t> facet_;
 };
