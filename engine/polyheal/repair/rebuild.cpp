@@ -1835,11 +1835,12 @@ class BoundedDecimation {
     for (vertex_descriptor v : mesh_.vertices()) at_[static_cast<std::size_t>(v)] = nearest_point3d(mesh_.point(v));
   }
 
-  /// Only vertices whose second ring lies on one side of an axis-aligned
-  /// plane (below it: coordinate < at; else >= at) collapse: all that
-  /// deciding and making a collapse reads and changes is there
-  /// (sweep_in_halves()).
-  void restrict_to(int axis, double at, bool below) { side_ = Side{axis, at, below}; }
+  /// Which vertices collapse, by where their second ring (all that
+  /// deciding and making a collapse reads and changes) lies against an
+  /// axis-aligned plane: below it (coordinate < at), above it (>= at), or
+  /// across it, the seam (sweep_in_halves()).
+  enum class Part { below, above, seam };
+  void restrict_to(int axis, double at, Part part) { side_ = Side{axis, at, part}; }
 
   /// §5, Fig. 15 (crisper edges from the facets' normals): a vertex whose
   /// neighbourhood lies on facets of two planes meeting at more than the
@@ -1967,27 +1968,29 @@ class BoundedDecimation {
 
   const Point3d& at(vertex_descriptor v) const { return at_[static_cast<std::size_t>(v)]; }
 
-  /// Whether v and its second ring lie on the side (restrict_to()): the
+  /// Whether v's second ring lies in the part restrict_to() names: the
   /// stars of v and of its neighbours, the faces the index finds near the
   /// new fan (within v's first ring's box) and the guards' vertices are all
   /// within it.
-  bool on_own_side(vertex_descriptor v) const {
+  bool in_own_part(vertex_descriptor v) const {
     if (!side_) return true;
-    auto in = [&](vertex_descriptor w) {
-      const double x = at(w)[side_->axis];
-      return side_->below ? x < side_->at : x >= side_->at;
-    };
-    if (!in(v)) return false;
+    bool below = false, above = false;
+    auto see = [&](vertex_descriptor w) { (at(w)[side_->axis] < side_->at ? below : above) = true; };
+    see(v);
     for (vertex_descriptor x : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_)) {
-      if (!in(x)) return false;
-      for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(x), mesh_))
-        if (!in(w)) return false;
+      see(x);
+      for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(x), mesh_)) see(w);
     }
-    return true;
+    switch (side_->part) {
+      case Part::below: return !above;
+      case Part::above: return !below;
+      case Part::seam: return below && above;
+    }
+    return false;
   }
 
   bool try_collapse(vertex_descriptor v, double limit) {
-    if (kept_.frozen(at(v)) || !on_own_side(v)) return false;
+    if (kept_.frozen(at(v)) || !in_own_part(v)) return false;
     std::vector<face_descriptor>& star = star_;  // scratch buffers, reused: most calls make no collapse
     star.clear();
     double carried = 0, old_quality = HUGE_VAL;
@@ -2300,7 +2303,7 @@ class BoundedDecimation {
   struct Side {
     int axis;
     double at;
-    bool below;
+    Part part;
   };
 
   Mesh& mesh_;
@@ -2375,22 +2378,36 @@ void compact(Mesh& mesh) {
   else mesh.collect_garbage();  // never seen: the decimation keeps the surface manifold
 }
 
-/// A sweep of the decimation (the first, at a quarter of the tolerance,
-/// makes two thirds of its collapses) on the two halves of the surface at
-/// once. The points are split at their median along the longest side of
-/// their box; each half is a mesh of the faces with a corner on its side,
-/// where a vertex collapses only if its second ring lies on that side
-/// (restrict_to(): all a collapse reads and changes). So neither half reads
-/// what the other changes, the faces across the plane stay as they are in
-/// both, and the two are joined again — vertices and faces in their order
-/// in the mesh, which is what the same sweeps make of it one after the other
-/// (`parallel` false, for tests: the result, and so the sweeps after it,
-/// do not depend on the number of threads). Vertices near the plane are
-/// left to the sweep that follows on the whole surface. Returns the
-/// collapses made; nothing, the mesh as it was, for a surface too small to
-/// split or — never seen — halves that cannot be joined.
+/// The decimation's sweeps at one threshold (the first, at a quarter of the
+/// tolerance, makes two thirds of all collapses) on the two halves of the
+/// surface at once. The points are split at their median along the longest
+/// side of their box; each half is a mesh of the faces with a corner on its
+/// side, where a vertex collapses only if its second ring lies on that side
+/// (restrict_to(): all a collapse reads and changes) — a sweep, and a second
+/// when the first made a collapse. So neither half reads what the other
+/// changes, the faces across the plane stay as they are in both, and the two
+/// are joined again — vertices and faces in their order in the mesh, which
+/// is what the same sweeps make of it one after the other (`parallel`
+/// false, for tests: the result, and so the sweeps after it, do not depend
+/// on the number of threads). Then, if the halves made a collapse, one
+/// sweep on the whole surface of the vertices whose second ring crosses the
+/// plane (the seam). Returns the collapses made, the mesh compacted;
+/// nothing, the mesh as it was, for a surface too small to split or —
+/// never seen — halves that cannot be joined.
 std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& reference, double tolerance,
                                            double diagonal, const KeptRegions& kept, double limit, bool parallel) {
+  using Part = BoundedDecimation::Part;
+  auto sweeps = [&](BoundedDecimation& decimation) {  // a sweep, and a second if the first made a collapse
+    const std::size_t made = decimation.sweep(limit);
+    return made > 0 ? made + decimation.sweep(limit) : made;
+  };
+  auto seam = [&](int axis, double middle) -> std::size_t {
+    BoundedDecimation decimation(mesh, reference, tolerance, diagonal, kept);
+    decimation.restrict_to(axis, middle, Part::seam);
+    const std::size_t made = decimation.sweep(limit);
+    compact(mesh);
+    return made;
+  };
   constexpr std::size_t kSplitFrom = 4096;  // vertices: below, a sweep costs little
   const std::size_t n = mesh.number_of_vertices();
   if (n < kSplitFrom || mesh.number_of_removed_vertices() > 0) return std::nullopt;
@@ -2408,14 +2425,16 @@ std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& refer
   std::nth_element(coordinate.begin(), coordinate.begin() + std::ptrdiff_t(n / 2), coordinate.end());
   const double middle = coordinate[n / 2];
   if (!parallel) {
-    BoundedDecimation decimation(mesh, reference, tolerance, diagonal, kept);
     std::size_t made = 0;
-    for (bool below : {true, false}) {
-      decimation.restrict_to(axis, middle, below);
-      made += decimation.sweep(limit);
+    {
+      BoundedDecimation decimation(mesh, reference, tolerance, diagonal, kept);
+      for (Part part : {Part::below, Part::above}) {
+        decimation.restrict_to(axis, middle, part);
+        made += sweeps(decimation);
+      }
     }
     compact(mesh);
-    return made;
+    return made > 0 ? made + seam(axis, middle) : made;
   }
 
   // half[s]'s vertex i is mesh vertex vertices[s][i] and its face i mesh
@@ -2442,8 +2461,8 @@ std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& refer
   std::size_t made[2] = {0, 0};
   auto run_half = [&](int s) {
     BoundedDecimation decimation(*half[s], reference, tolerance, diagonal, kept);
-    decimation.restrict_to(axis, middle, s == 0);
-    made[s] = decimation.sweep(limit);
+    decimation.restrict_to(axis, middle, s == 0 ? Part::below : Part::above);
+    made[s] = sweeps(decimation);
   };
   tbb::parallel_invoke([&] { run_half(0); }, [&] { run_half(1); });
 
@@ -2472,24 +2491,26 @@ std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& refer
       });
   if (!joined) return std::nullopt;
   mesh = std::move(*joined);
-  return made[0] + made[1];
+  return made[0] + made[1] > 0 ? made[0] + made[1] + seam(axis, middle) : std::size_t(0);
 }
 
 /// The bounded decimation: sweeps at a quarter, half and all of the
-/// tolerance (the cheapest collapses first), the first at each in halves
-/// (sweep_in_halves()), a second on the whole surface when the first made
-/// a collapse (what the first left, and the vertices near the halves'
-/// plane). Returns the collapses made.
+/// tolerance (the cheapest collapses first); at each, a second sweep when
+/// the first made a collapse (what the first left). In halves
+/// (sweep_in_halves()) where the surface is large enough. Returns the
+/// collapses made.
 std::size_t decimate(Mesh& mesh, const TriangleGrid& reference, double tolerance, double diagonal,
                      const KeptRegions& kept, bool halves_in_parallel) {
   std::size_t collapses = 0;
   for (double fraction : {0.25, 0.5, 1.0}) {
     const double limit = fraction * tolerance;
-    const std::optional<std::size_t> in_halves =
-        sweep_in_halves(mesh, reference, tolerance, diagonal, kept, limit, halves_in_parallel);
-    if (in_halves == std::size_t(0)) continue;  // no second sweep; the joined mesh has nothing removed
+    if (const std::optional<std::size_t> in_halves =
+            sweep_in_halves(mesh, reference, tolerance, diagonal, kept, limit, halves_in_parallel)) {
+      collapses += *in_halves;
+      continue;
+    }
     BoundedDecimation decimation(mesh, reference, tolerance, diagonal, kept);
-    const std::size_t made = in_halves ? *in_halves : decimation.sweep(limit);
+    const std::size_t made = decimation.sweep(limit);
     collapses += made;
     if (made > 0) collapses += decimation.sweep(limit);
     compact(mesh);  // sweep_in_halves() takes a mesh without removed elements
