@@ -1497,26 +1497,83 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
 using SMesh = CGAL::Surface_mesh<IPoint>;
 using SVertex = SMesh::Vertex_index;
 
+/// Where a vertex's second ring lies against an axis-aligned plane: below it
+/// (coordinate < at), above it (>= at), or across it, the seam. A surface's
+/// halves are coarsened and decimated at once, each vertex only where all a
+/// collapse of it reads and changes — its second ring — is in its half
+/// (coarsen_planar(), sweep_in_halves()); the seam after.
+enum class Part { below, above, seam };
+struct Plane {
+  int axis;
+  double at;
+};
+
+/// The plane through the points' median along the longest side of their box.
+Plane median_plane(const std::vector<Point3d>& points) {
+  Region box;
+  for (const Point3d& p : points) grow(box, p, box.count++ == 0);
+  int axis = 0;
+  for (int k = 1; k < 3; ++k)
+    if (box.hi[k] - box.lo[k] > box.hi[axis] - box.lo[axis]) axis = k;
+  std::vector<double> coordinate;
+  coordinate.reserve(points.size());
+  for (const Point3d& p : points) coordinate.push_back(p[axis]);
+  const std::size_t n = coordinate.size();
+  std::nth_element(coordinate.begin(), coordinate.begin() + std::ptrdiff_t(n / 2), coordinate.end());
+  return {axis, coordinate[n / 2]};
+}
+
+/// Whether v's second ring in `mesh` is in `part` of `plane`;
+/// `coordinate(w)`: vertex w's coordinate along the plane's axis.
+template <class M, class Coordinate>
+bool second_ring_in(const M& mesh, typename M::Vertex_index v, const Plane& plane, Part part, Coordinate coordinate) {
+  bool below = false, above = false;
+  auto see = [&](typename M::Vertex_index w) { (coordinate(w) < plane.at ? below : above) = true; };
+  see(v);
+  for (auto x : CGAL::vertices_around_target(mesh.halfedge(v), mesh)) {
+    see(x);
+    for (auto w : CGAL::vertices_around_target(mesh.halfedge(x), mesh)) see(w);
+  }
+  switch (part) {
+    case Part::below: return !above;
+    case Part::above: return !below;
+    case Part::seam: return below && above;
+  }
+  return false;
+}
+
 class PlanarCoarsening {
  public:
+  /// `diagonal`: of the whole surface's points (TetGen's shortest edge, which
+  /// the new triangles keep to, is relative to it).
   PlanarCoarsening(const Facets& f, const std::vector<OutVertex>& vertices, const std::vector<char>& on_plane,
-                   const std::vector<Tri>& tris)
+                   const std::vector<Tri>& tris, double diagonal)
       : f_(f), on_plane_(on_plane) {  // copied: collapses update it
-    Region all;
     for (const OutVertex& v : vertices) {
       mesh_.add_vertex(ipoint(v.p));
       facet_.push_back(v.facet);
-      grow(all, v.p, all.count++ == 0);
     }
     for (const Tri& t : tris) mesh_.add_face(SVertex(t[0]), SVertex(t[1]), SVertex(t[2]));
     // TetGen's shortest edge, a little longer (the written surface's bbox
     // is about these points').
-    shortest_edge_ = vertices.empty() ? 0 : 1.01 * tetgen_epsilon_ * dist(all.lo, all.hi);
+    shortest_edge_ = 1.01 * tetgen_epsilon_ * diagonal;
   }
 
+  /// Only vertices whose second ring (all that deciding and making a
+  /// collapse reads and changes) is in `part` collapse; for the seam, only
+  /// the seam's vertices are tried first, and whatever their collapses
+  /// change after them (coarsen_planar()).
+  void restrict_to(const Plane& plane, Part part) { side_ = Side{plane, part}; }
+
+  /// Tries every vertex (of the part), and again the neighbours of each
+  /// collapse, until none is left; returns the collapses made.
   std::size_t run() {
-    std::vector<SVertex> work(mesh_.vertices().begin(), mesh_.vertices().end());
-    std::vector<char> queued(mesh_.number_of_vertices(), 1);
+    std::vector<SVertex> work;
+    for (SVertex v : mesh_.vertices())
+      if (!side_ || side_->part != Part::seam || in_own_part(v)) work.push_back(v);
+    if (side_ && side_->part == Part::seam) side_.reset();
+    std::vector<char> queued(mesh_.number_of_vertices() + mesh_.number_of_removed_vertices(), 0);
+    for (SVertex v : work) queued[v] = 1;
     std::size_t collapses = 0;
     while (!work.empty()) {
       const SVertex v = work.back();
@@ -1535,20 +1592,33 @@ class PlanarCoarsening {
     return collapses;
   }
 
-  /// The coarsened surface: points and triangles, with each vertex's facet.
-  void result(std::vector<OutVertex>& vertices, std::vector<Tri>& tris) const {
+  /// The coarsened surface: points and triangles, with each vertex's facet
+  /// and whether it may collapse. Vertex and face ids are the indices into
+  /// the vectors the mesh was made of; the removed ones are left out.
+  void result(std::vector<OutVertex>& vertices, std::vector<char>& on_plane, std::vector<Tri>& tris) const {
     std::vector<Index> id(mesh_.number_of_vertices() + mesh_.number_of_removed_vertices(), 0);
     vertices.clear();
+    on_plane.clear();
     for (SVertex v : mesh_.vertices()) {
       id[v] = static_cast<Index>(vertices.size());
-      const IPoint& p = mesh_.point(v);
-      vertices.push_back({{p.x(), p.y(), p.z()}, facet_[v]});
+      vertices.push_back(vertex(v));
+      on_plane.push_back(on_plane_[v]);
     }
     tris.clear();
-    for (auto fc : mesh_.faces()) {
-      const auto h = mesh_.halfedge(fc);
-      tris.push_back({id[mesh_.source(h)], id[mesh_.target(h)], id[mesh_.target(mesh_.next(h))]});
-    }
+    for (auto fc : mesh_.faces()) tris.push_back(corners(fc, [&](SVertex v) { return id[v]; }));
+  }
+
+  const SMesh& mesh() const { return mesh_; }
+  OutVertex vertex(SVertex v) const {
+    const IPoint& p = mesh_.point(v);
+    return {{p.x(), p.y(), p.z()}, facet_[v]};
+  }
+  bool on_plane(SVertex v) const { return on_plane_[v]; }
+  /// Face fc's corners, named by `id(vertex)`, from its halfedge's source.
+  template <class Id>
+  Tri corners(SMesh::Face_index fc, Id id) const {
+    const auto h = mesh_.halfedge(fc);
+    return {id(mesh_.source(h)), id(mesh_.target(h)), id(mesh_.target(mesh_.next(h)))};
   }
 
  private:
@@ -1584,8 +1654,13 @@ class PlanarCoarsening {
   }
   static Point3d pt(const IPoint& p) { return {p.x(), p.y(), p.z()}; }
 
+  bool in_own_part(SVertex v) const {
+    return !side_ || second_ring_in(mesh_, v, side_->plane, side_->part,
+                                    [&](SVertex w) { return mesh_.point(w)[side_->plane.axis]; });
+  }
+
   SVertex try_collapse(SVertex v) {
-    if (!on_plane_[v]) return SMesh::null_vertex();
+    if (!on_plane_[v] || !in_own_part(v)) return SMesh::null_vertex();
     const std::int64_t plane = facet_[v];
     std::vector<SVertex> ring;
     for (SVertex u : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_)) {
@@ -1666,9 +1741,15 @@ class PlanarCoarsening {
            segments_closer_than(c, c, a, b, shortest_edge_);
   }
 
+  struct Side {
+    Plane plane;
+    Part part;
+  };
+
   static constexpr std::size_t kMaxValence = 24;
   const double tetgen_epsilon_ = InspectOptions().tetgen_epsilon;
   double shortest_edge_ = 0;
+  std::optional<Side> side_;
   const Facets& f_;
   std::vector<char> on_plane_;
   std::unordered_map<std::uint64_t, bool> coplanar_;
@@ -1676,6 +1757,106 @@ class PlanarCoarsening {
   SMesh mesh_;
   std::vector<std::int64_t> facet_;
 };
+
+/// The planar coarsening of a surface (`on_plane`: the vertices that may
+/// collapse) into `out_vertices`, `out_tris`; returns the collapses made.
+/// A large surface is coarsened on its two halves at once, as the
+/// decimation is (sweep_in_halves()): split at the points' median plane,
+/// each half a mesh of the faces with a corner on its side, where a vertex
+/// collapses only if its second ring is on that side; neither half reads
+/// what the other changes, and the faces across the plane stay in both. The
+/// halves are joined vertex for vertex and face for face in the surface's
+/// order — what the same runs make of it one after the other (`parallel`
+/// false, for tests) — and the seam's vertices are tried last, on the whole.
+std::size_t coarsen_planar(const Facets& f, const std::vector<OutVertex>& vertices, const std::vector<char>& on_plane,
+                           const std::vector<Tri>& tris, bool parallel, std::vector<OutVertex>& out_vertices,
+                           std::vector<Tri>& out_tris) {
+  constexpr std::size_t kSplitFrom = 4096;  // vertices that may collapse: below, a run costs little
+  std::vector<Point3d> points;
+  Region box;
+  for (const OutVertex& v : vertices) {
+    points.push_back(v.p);
+    grow(box, v.p, box.count++ == 0);
+  }
+  const double diagonal = dist(box.lo, box.hi);
+  std::vector<char> out_on_plane;
+  if (std::size_t(std::count(on_plane.begin(), on_plane.end(), 1)) < kSplitFrom) {
+    PlanarCoarsening whole(f, vertices, on_plane, tris, diagonal);
+    const std::size_t made = whole.run();
+    whole.result(out_vertices, out_on_plane, out_tris);
+    return made;
+  }
+  const Plane plane = median_plane(points);
+  std::vector<OutVertex> joined_vertices;
+  std::vector<char> joined_on_plane;
+  std::vector<Tri> joined_tris;
+  std::size_t made = 0;
+  if (!parallel) {
+    PlanarCoarsening whole(f, vertices, on_plane, tris, diagonal);
+    for (Part part : {Part::below, Part::above}) {
+      whole.restrict_to(plane, part);
+      made += whole.run();
+    }
+    whole.result(joined_vertices, joined_on_plane, joined_tris);
+  } else {
+    // half s's vertex i is vertices[sub_vertex[s][i]], its face j tris[sub_face[s][j]]
+    std::vector<Index> sub_vertex[2], sub_face[2];
+    std::optional<PlanarCoarsening> half[2];
+    std::size_t half_made[2] = {0, 0};
+    auto run_half = [&](int s) {
+      std::vector<char> used(vertices.size(), 0);
+      for (std::size_t t = 0; t < tris.size(); ++t) {
+        bool here = false;
+        for (Index v : tris[t]) here = here || (vertices[v].p[plane.axis] < plane.at) == (s == 0);
+        if (!here) continue;
+        sub_face[s].push_back(Index(t));
+        for (Index v : tris[t]) used[v] = 1;
+      }
+      std::vector<Index> local(vertices.size(), kNoIndex);
+      std::vector<OutVertex> half_vertices;
+      std::vector<char> half_on_plane;
+      for (std::size_t v = 0; v < vertices.size(); ++v)
+        if (used[v]) {
+          local[v] = Index(sub_vertex[s].size());
+          sub_vertex[s].push_back(Index(v));
+          half_vertices.push_back(vertices[v]);
+          half_on_plane.push_back(on_plane[v]);
+        }
+      std::vector<Tri> half_tris;
+      for (Index t : sub_face[s]) half_tris.push_back({local[tris[t][0]], local[tris[t][1]], local[tris[t][2]]});
+      half[s].emplace(f, half_vertices, half_on_plane, half_tris, diagonal);
+      half[s]->restrict_to(plane, s == 0 ? Part::below : Part::above);
+      half_made[s] = half[s]->run();
+    };
+    tbb::parallel_invoke([&] { run_half(0); }, [&] { run_half(1); });
+    made = half_made[0] + half_made[1];
+    // Join: each vertex and face from the half that still has it (one in
+    // both is a corner of a face across the plane, or that face, which
+    // neither half changed).
+    std::vector<std::pair<int, SVertex>> by_vertex(vertices.size(), {-1, SVertex()});
+    std::vector<std::pair<int, SMesh::Face_index>> by_face(tris.size(), {-1, SMesh::Face_index()});
+    for (int s = 1; s >= 0; --s) {
+      for (SVertex v : half[s]->mesh().vertices()) by_vertex[sub_vertex[s][v]] = {s, v};
+      for (SMesh::Face_index fc : half[s]->mesh().faces()) by_face[sub_face[s][fc]] = {s, fc};
+    }
+    std::vector<Index> id(vertices.size(), kNoIndex);
+    for (std::size_t v = 0; v < vertices.size(); ++v) {
+      const auto [s, w] = by_vertex[v];
+      if (s < 0) continue;
+      id[v] = Index(joined_vertices.size());
+      joined_vertices.push_back(half[s]->vertex(w));
+      joined_on_plane.push_back(half[s]->on_plane(w));
+    }
+    for (const auto& [s, fc] : by_face)
+      if (s >= 0)
+        joined_tris.push_back(half[s]->corners(fc, [&, s = s](SVertex w) { return id[sub_vertex[s][w]]; }));
+  }
+  PlanarCoarsening seam(f, joined_vertices, joined_on_plane, joined_tris, diagonal);
+  seam.restrict_to(plane, Part::seam);
+  made += seam.run();
+  seam.result(out_vertices, out_on_plane, out_tris);
+  return made;
+}
 
 // ---------------------------------------------------------------------------
 // Decimation within a tolerance (the paper's §5: fewer faces). Halfedge
@@ -1835,12 +2016,9 @@ class BoundedDecimation {
     for (vertex_descriptor v : mesh_.vertices()) at_[static_cast<std::size_t>(v)] = nearest_point3d(mesh_.point(v));
   }
 
-  /// Which vertices collapse, by where their second ring (all that
-  /// deciding and making a collapse reads and changes) lies against an
-  /// axis-aligned plane: below it (coordinate < at), above it (>= at), or
-  /// across it, the seam (sweep_in_halves()).
-  enum class Part { below, above, seam };
-  void restrict_to(int axis, double at, Part part) { side_ = Side{axis, at, part}; }
+  /// Only vertices whose second ring (all that deciding and making a
+  /// collapse reads and changes) is in `part` collapse (sweep_in_halves()).
+  void restrict_to(const Plane& plane, Part part) { side_ = Side{plane, part}; }
 
   /// §5, Fig. 15 (crisper edges from the facets' normals): a vertex whose
   /// neighbourhood lies on facets of two planes meeting at more than the
@@ -1973,20 +2151,8 @@ class BoundedDecimation {
   /// new fan (within v's first ring's box) and the guards' vertices are all
   /// within it.
   bool in_own_part(vertex_descriptor v) const {
-    if (!side_) return true;
-    bool below = false, above = false;
-    auto see = [&](vertex_descriptor w) { (at(w)[side_->axis] < side_->at ? below : above) = true; };
-    see(v);
-    for (vertex_descriptor x : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_)) {
-      see(x);
-      for (vertex_descriptor w : CGAL::vertices_around_target(mesh_.halfedge(x), mesh_)) see(w);
-    }
-    switch (side_->part) {
-      case Part::below: return !above;
-      case Part::above: return !below;
-      case Part::seam: return below && above;
-    }
-    return false;
+    return !side_ || second_ring_in(mesh_, v, side_->plane, side_->part,
+                                    [&](vertex_descriptor w) { return at(w)[side_->plane.axis]; });
   }
 
   bool try_collapse(vertex_descriptor v, double limit) {
@@ -2301,8 +2467,7 @@ class BoundedDecimation {
   }
 
   struct Side {
-    int axis;
-    double at;
+    Plane plane;
     Part part;
   };
 
@@ -2396,14 +2561,13 @@ void compact(Mesh& mesh) {
 /// never seen — halves that cannot be joined.
 std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& reference, double tolerance,
                                            double diagonal, const KeptRegions& kept, double limit, bool parallel) {
-  using Part = BoundedDecimation::Part;
   auto sweeps = [&](BoundedDecimation& decimation) {  // a sweep, and a second if the first made a collapse
     const std::size_t made = decimation.sweep(limit);
     return made > 0 ? made + decimation.sweep(limit) : made;
   };
-  auto seam = [&](int axis, double middle) -> std::size_t {
+  auto seam = [&](const Plane& plane) -> std::size_t {
     BoundedDecimation decimation(mesh, reference, tolerance, diagonal, kept);
-    decimation.restrict_to(axis, middle, Part::seam);
+    decimation.restrict_to(plane, Part::seam);
     const std::size_t made = decimation.sweep(limit);
     compact(mesh);
     return made;
@@ -2412,29 +2576,19 @@ std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& refer
   const std::size_t n = mesh.number_of_vertices();
   if (n < kSplitFrom || mesh.number_of_removed_vertices() > 0) return std::nullopt;
   std::vector<Point3d> at(n);
-  Region box;
-  for (vertex_descriptor v : mesh.vertices()) {
-    at[static_cast<std::size_t>(v)] = nearest_point3d(mesh.point(v));
-    grow(box, at[static_cast<std::size_t>(v)], box.count++ == 0);
-  }
-  int axis = 0;
-  for (int k = 1; k < 3; ++k)
-    if (box.hi[k] - box.lo[k] > box.hi[axis] - box.lo[axis]) axis = k;
-  std::vector<double> coordinate(n);
-  for (std::size_t v = 0; v < n; ++v) coordinate[v] = at[v][axis];
-  std::nth_element(coordinate.begin(), coordinate.begin() + std::ptrdiff_t(n / 2), coordinate.end());
-  const double middle = coordinate[n / 2];
+  for (vertex_descriptor v : mesh.vertices()) at[static_cast<std::size_t>(v)] = nearest_point3d(mesh.point(v));
+  const Plane plane = median_plane(at);
   if (!parallel) {
     std::size_t made = 0;
     {
       BoundedDecimation decimation(mesh, reference, tolerance, diagonal, kept);
       for (Part part : {Part::below, Part::above}) {
-        decimation.restrict_to(axis, middle, part);
+        decimation.restrict_to(plane, part);
         made += sweeps(decimation);
       }
     }
     compact(mesh);
-    return made > 0 ? made + seam(axis, middle) : made;
+    return made > 0 ? made + seam(plane) : made;
   }
 
   // half[s]'s vertex i is mesh vertex vertices[s][i] and its face i mesh
@@ -2447,7 +2601,7 @@ std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& refer
     for (face_descriptor f : mesh.faces()) {
       bool here = false;
       for (vertex_descriptor v : CGAL::vertices_around_face(mesh.halfedge(f), mesh))
-        here = here || (at[static_cast<std::size_t>(v)][axis] < middle) == (s == 0);
+        here = here || (at[static_cast<std::size_t>(v)][plane.axis] < plane.at) == (s == 0);
       if (!here) continue;
       faces[s].emplace_back(0, f);
       for (vertex_descriptor v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) used[static_cast<std::size_t>(v)] = 1;
@@ -2461,7 +2615,7 @@ std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& refer
   std::size_t made[2] = {0, 0};
   auto run_half = [&](int s) {
     BoundedDecimation decimation(*half[s], reference, tolerance, diagonal, kept);
-    decimation.restrict_to(axis, middle, s == 0 ? Part::below : Part::above);
+    decimation.restrict_to(plane, s == 0 ? Part::below : Part::above);
     made[s] = sweeps(decimation);
   };
   tbb::parallel_invoke([&] { run_half(0); }, [&] { run_half(1); });
@@ -2491,7 +2645,7 @@ std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& refer
       });
   if (!joined) return std::nullopt;
   mesh = std::move(*joined);
-  return made[0] + made[1] > 0 ? made[0] + made[1] + seam(axis, middle) : std::size_t(0);
+  return made[0] + made[1] > 0 ? made[0] + made[1] + seam(plane) : std::size_t(0);
 }
 
 /// The bounded decimation: sweeps at a quarter, half and all of the
@@ -3164,11 +3318,10 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     // the coarsening is done again. The extracted surface itself, the last
     // resort, intersects nothing: its pieces lie in their own tetrahedra.
     for (int attempt = 0;; ++attempt) {
-      PlanarCoarsening coarsening(f, vertices, on_plane, tris);
-      const std::size_t collapses = coarsening.run();
       std::vector<OutVertex> coarse_vertices;
       std::vector<Tri> coarse_tris;
-      coarsening.result(coarse_vertices, coarse_tris);
+      const std::size_t collapses =
+          coarsen_planar(f, vertices, on_plane, tris, options.halves_in_parallel, coarse_vertices, coarse_tris);
       Soup coarse;
       for (const OutVertex& v : coarse_vertices) coarse.points.push_back(v.p);
       for (const Tri& t : coarse_tris) coarse.add_triangle(t[0], t[1], t[2]);
