@@ -62,6 +62,13 @@ void grow(Region& g, const Point3d& p, bool first) {
   }
 }
 
+/// The points' bounding box.
+Region bounds(const std::vector<Point3d>& points) {
+  Region box;
+  for (const Point3d& p : points) grow(box, p, box.count++ == 0);
+  return box;
+}
+
 /// Each boundary loop of `s` (boundary edges joined at shared vertices):
 /// its edge count and bounding box, largest first.
 std::vector<Region> boundary_loop_regions(const Soup& s, const Topology& topo) {
@@ -1510,8 +1517,7 @@ struct Plane {
 
 /// The plane through the points' median along the longest side of their box.
 Plane median_plane(const std::vector<Point3d>& points) {
-  Region box;
-  for (const Point3d& p : points) grow(box, p, box.count++ == 0);
+  const Region box = bounds(points);
   int axis = 0;
   for (int k = 1; k < 3; ++k)
     if (box.hi[k] - box.lo[k] > box.hi[axis] - box.lo[axis]) axis = k;
@@ -1773,11 +1779,8 @@ std::size_t coarsen_planar(const Facets& f, const std::vector<OutVertex>& vertic
                            std::vector<Tri>& out_tris) {
   constexpr std::size_t kSplitFrom = 4096;  // vertices that may collapse: below, a run costs little
   std::vector<Point3d> points;
-  Region box;
-  for (const OutVertex& v : vertices) {
-    points.push_back(v.p);
-    grow(box, v.p, box.count++ == 0);
-  }
+  for (const OutVertex& v : vertices) points.push_back(v.p);
+  const Region box = bounds(points);
   const double diagonal = dist(box.lo, box.hi);
   std::vector<char> out_on_plane;
   if (std::size_t(std::count(on_plane.begin(), on_plane.end(), 1)) < kSplitFrom) {
@@ -2120,6 +2123,13 @@ class BoundedDecimation {
     for (vertex_descriptor v : all)
       if (!mesh_.is_removed(v) && try_collapse(v, limit)) ++made;
     return made;
+  }
+
+  /// A sweep, and a second when the first made a collapse (what the first
+  /// left may collapse now); returns the collapses made.
+  std::size_t sweeps(double limit) {
+    const std::size_t made = sweep(limit);
+    return made > 0 ? made + sweep(limit) : made;
   }
 
  private:
@@ -2561,10 +2571,6 @@ void compact(Mesh& mesh) {
 /// never seen — halves that cannot be joined.
 std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& reference, double tolerance,
                                            double diagonal, const KeptRegions& kept, double limit, bool parallel) {
-  auto sweeps = [&](BoundedDecimation& decimation) {  // a sweep, and a second if the first made a collapse
-    const std::size_t made = decimation.sweep(limit);
-    return made > 0 ? made + decimation.sweep(limit) : made;
-  };
   auto seam = [&](const Plane& plane) -> std::size_t {
     BoundedDecimation decimation(mesh, reference, tolerance, diagonal, kept);
     decimation.restrict_to(plane, Part::seam);
@@ -2584,7 +2590,7 @@ std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& refer
       BoundedDecimation decimation(mesh, reference, tolerance, diagonal, kept);
       for (Part part : {Part::below, Part::above}) {
         decimation.restrict_to(plane, part);
-        made += sweeps(decimation);
+        made += decimation.sweeps(limit);
       }
     }
     compact(mesh);
@@ -2616,7 +2622,7 @@ std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& refer
   auto run_half = [&](int s) {
     BoundedDecimation decimation(*half[s], reference, tolerance, diagonal, kept);
     decimation.restrict_to(plane, s == 0 ? Part::below : Part::above);
-    made[s] = sweeps(decimation);
+    made[s] = decimation.sweeps(limit);
   };
   tbb::parallel_invoke([&] { run_half(0); }, [&] { run_half(1); });
 
@@ -2663,10 +2669,7 @@ std::size_t decimate(Mesh& mesh, const TriangleGrid& reference, double tolerance
       collapses += *in_halves;
       continue;
     }
-    BoundedDecimation decimation(mesh, reference, tolerance, diagonal, kept);
-    const std::size_t made = decimation.sweep(limit);
-    collapses += made;
-    if (made > 0) collapses += decimation.sweep(limit);
+    collapses += BoundedDecimation(mesh, reference, tolerance, diagonal, kept).sweeps(limit);
     compact(mesh);  // sweep_in_halves() takes a mesh without removed elements
   }
   return collapses;
@@ -3366,8 +3369,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     for (vertex_descriptor v : mesh.vertices()) facet[v] = facet_at.at(nearest_point3d(mesh.point(v)));
     const double tolerance = options.decimate_tolerance * r.cell;
     const TriangleGrid reference(extracted, std::max(r.cell, tolerance));
-    Region points;
-    for (const Point3d& p : out.points) grow(points, p, points.count++ == 0);
+    const Region points = bounds(out.points);
     const double diagonal = dist(points.lo, points.hi);
     if (options.sharpen) {
       BoundedDecimation sharpening(mesh, reference, tolerance, diagonal, kept);
