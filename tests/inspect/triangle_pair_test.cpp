@@ -251,3 +251,56 @@ TEST_CASE("triangle_pair: needles of one fan whose sides from the apex run along
     }
   }
 }
+
+TEST_CASE("triangle_pair: pairs in one axis-aligned plane, corners on a small grid, are decided as CGAL's predicates decide them",
+          "[inspect]") {
+  // Corners sharing one coordinate exactly (a CAD part's flat sides, the grid
+  // surface rebuild extracts beside them) are decided in the plane of the
+  // other two coordinates. Corners on a 5 x 5 grid make the contacts that
+  // matter frequent: a corner on the other's edge, edges along one line,
+  // coincident corners of distinct vertices, a side along the other's side
+  // at the shared corner. Each axis; 0, 1 or 2 shared corners; each pair
+  // asked in both orders and with its corners rotated.
+  std::mt19937 rng(17);
+  std::uniform_int_distribution<int> g(0, 4);
+  using P = InputKernel::Point_3;
+  using T = detail::Tri<InputKernel>;
+  std::size_t intersecting[3] = {0, 0, 0}, apart[3] = {0, 0, 0};
+  for (int trial = 0; trial < 9000; ++trial) {
+    const int axis = trial % 3, shared = (trial / 3) % 3;
+    auto on = [&]() {
+      double c[3];
+      c[axis] = 0.375;
+      c[(axis + 1) % 3] = 0.25 * g(rng) - 0.5;
+      c[(axis + 2) % 3] = 0.5 * g(rng) + 1;
+      return P(c[0], c[1], c[2]);
+    };
+    std::array<P, 3> a{on(), on(), on()}, b{on(), on(), on()};
+    std::array<std::uint64_t, 3> ib{4, 5, 6};
+    for (int k = 0; k < shared; ++k) {  // truth() wants the shared corners first, in order
+      b[std::size_t(k)] = a[std::size_t(k)];
+      ib[std::size_t(k)] = std::uint64_t(k + 1);
+    }
+    const T x = detail::make_tri<InputKernel>(a[0], a[1], a[2], 1, 2, 3);
+    const T y = detail::make_tri<InputKernel>(b[0], b[1], b[2], ib[0], ib[1], ib[2]);
+    if (x.degenerate || y.degenerate) continue;
+    const bool want = truth(x, y, shared);
+    const int r = int(rng() % 3);
+    auto rotated = [r](const T& t) {
+      return detail::make_tri<InputKernel>(t.p[std::size_t(r)], t.p[std::size_t((r + 1) % 3)],
+                                           t.p[std::size_t((r + 2) % 3)], t.id[std::size_t(r)],
+                                           t.id[std::size_t((r + 1) % 3)], t.id[std::size_t((r + 2) % 3)]);
+    };
+    INFO("trial " << trial << ", axis " << axis << ", shared " << shared);
+    CHECK(detail::faces_intersect<InputKernel>(x, y) == want);
+    CHECK(detail::faces_intersect<InputKernel>(y, x) == want);
+    CHECK(detail::faces_intersect<InputKernel>(rotated(x), y) == want);
+    CHECK(detail::faces_intersect<InputKernel>(y, rotated(x)) == want);
+    ++(want ? intersecting : apart)[shared];
+  }
+  for (int k = 0; k < 3; ++k) {
+    INFO("shared " << k);
+    CHECK(intersecting[k] > 100);
+    CHECK(apart[k] > 100);
+  }
+}

@@ -3,6 +3,7 @@
 #include <boost/container/small_vector.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <optional>
 
@@ -197,12 +198,21 @@ struct LocalIndex::Impl {
     return true;
   }
 
-  /// A triangle ready for the pair test: exact, and on InputKernel too when
-  /// its corners are doubles (converted once, not once per pair).
+  /// A triangle ready for the pair test: on InputKernel when its corners are
+  /// doubles (converted once, not once per pair), exact otherwise. The
+  /// corners stay where they are in the mesh (which does not change during
+  /// a query): copying a lazy point is an atomic reference count, and most
+  /// pairs never need the exact form.
   struct Prepared {
-    Tri exact;
+    std::array<const Point*, 3> corner;
     bool doubles;
-    detail::Tri<InputKernel> input;
+    detail::Tri<InputKernel> input;  // doubles only
+    std::optional<Tri> exact;        // not doubles only
+    /// The exact form (made, for a triangle of doubles).
+    Tri exact_form() const {
+      if (exact) return *exact;
+      return {{*corner[0], *corner[1], *corner[2]}, input.id, input.degenerate};
+    }
   };
   /// Faces are triangles, or polygons fanned (rare): no heap for the usual case.
   using Fan = boost::container::small_vector<Prepared, 2>;
@@ -210,13 +220,13 @@ struct LocalIndex::Impl {
   static Prepared prepare(const Point& a, const Point& b, const Point& c, std::uint64_t ia, std::uint64_t ib,
                           std::uint64_t ic) {
     if (!(is_double_point(a) && is_double_point(b) && is_double_point(c)))
-      return {detail::make_tri<Kernel>(a, b, c, ia, ib, ic), false, {}};
+      return {{&a, &b, &c}, false, {}, detail::make_tri<Kernel>(a, b, c, ia, ib, ic)};
     // Degeneracy decided once, on the doubles (the same points, the same
     // exact answer as on the lazy ones, without their filter's overhead).
-    Prepared t{{{a, b, c}, {ia, ib, ic}, false}, true,
-               detail::make_tri<InputKernel>(to_input_point(a), to_input_point(b), to_input_point(c), ia, ib, ic)};
-    t.exact.degenerate = t.input.degenerate;
-    return t;
+    return {{&a, &b, &c},
+            true,
+            detail::make_tri<InputKernel>(to_input_point(a), to_input_point(b), to_input_point(c), ia, ib, ic),
+            std::nullopt};
   }
 
   /// The fan triangles of face f with their vertex ids.
@@ -241,7 +251,8 @@ struct LocalIndex::Impl {
   /// same answer, much cheaper on the coplanar pairs CAD meshes are full of).
   static bool pair_intersects(const Prepared& x, const Prepared& y) {
     if (x.doubles && y.doubles) return detail::faces_intersect<InputKernel>(x.input, y.input);
-    return detail::faces_intersect<Kernel>(x.exact, y.exact);
+    if (x.exact && y.exact) return detail::faces_intersect<Kernel>(*x.exact, *y.exact);
+    return detail::faces_intersect<Kernel>(x.exact_form(), y.exact_form());  // one of doubles: rare
   }
 
   /// Indexed faces whose boxes meet b (sorted unless told not to).

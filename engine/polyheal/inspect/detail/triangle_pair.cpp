@@ -280,6 +280,73 @@ inline Sides static_sides(const Tri<InputKernel>& a, const Tri<InputKernel>& b) 
   return uncertain ? Sides::uncertain : Sides::decided;
 }
 
+/// The axis (0, 1, 2) whose coordinate all six corners share exactly, or -1.
+/// Such triangles lie in one axis-aligned plane — the flat sides of CAD
+/// parts, and of the grid surfaces rebuild extracts next to them — where
+/// CGAL's three-dimensional tests take their coplanar branches, whose
+/// predicates (coplanar orientation) have no static filter: interval
+/// arithmetic under a switched rounding mode, for every pair.
+inline int common_axis_plane(const Tri<InputKernel>& a, const Tri<InputKernel>& b) {
+  for (int k = 0; k < 3; ++k) {
+    const double c = a.p[0][k];
+    if (a.p[1][k] == c && a.p[2][k] == c && b.p[0][k] == c && b.p[1][k] == c && b.p[2][k] == c) return k;
+  }
+  return -1;
+}
+
+/// In the plane x_axis = const, dropping that coordinate is a bijection onto
+/// the plane of the other two, so intersections there are the
+/// intersections of the projections, decided by CGAL's two-dimensional
+/// orientation predicate (statically filtered on doubles, exact).
+class AxisPlane {
+ public:
+  using P2 = InputKernel::Point_2;
+  explicit AxisPlane(int axis) : u_(axis == 0 ? 1 : 0), v_(axis == 2 ? 1 : 2) {}
+  P2 operator()(const InputKernel::Point_3& p) const { return {p[u_], p[v_]}; }
+
+  /// Two non-degenerate triangles v a b and v c d with the common corner v
+  /// share another point exactly when their angles at v (each less than a
+  /// half turn) share a direction: near v each triangle is its angle, and
+  /// the common part of two triangles is convex. Two such arcs of
+  /// directions meet exactly when one holds an end of the other.
+  static bool angles_meet(const P2& v, P2 a, P2 b, P2 c, P2 d) {
+    if (CGAL::orientation(v, a, b) == CGAL::RIGHT_TURN) std::swap(a, b);  // counterclockwise from a to b
+    if (CGAL::orientation(v, c, d) == CGAL::RIGHT_TURN) std::swap(c, d);
+    // x in the closed angle from a to b: not right of v->a, not left of v->b
+    auto in = [&v](const P2& from, const P2& to, const P2& x) {
+      return CGAL::orientation(v, from, x) != CGAL::RIGHT_TURN && CGAL::orientation(v, to, x) != CGAL::LEFT_TURN;
+    };
+    return in(a, b, c) || in(a, b, d) || in(c, d, a) || in(c, d, b);
+  }
+
+ private:
+  int u_, v_;
+};
+
+/// faces_intersect() for two non-degenerate triangles in the plane
+/// x_axis = const, with the same semantics, in two dimensions.
+inline bool faces_intersect_in_axis_plane(const Tri<InputKernel>& a, const Tri<InputKernel>& b, int axis,
+                                          int shared, const int ia[3], const int ib[3]) {
+  const AxisPlane to2(axis);
+  const std::array<AxisPlane::P2, 3> pa{to2(a.p[0]), to2(a.p[1]), to2(a.p[2])},
+      pb{to2(b.p[0]), to2(b.p[1]), to2(b.p[2])};
+  switch (shared) {
+    case 0:
+      return CGAL::do_intersect(InputKernel::Triangle_2(pa[0], pa[1], pa[2]),
+                                InputKernel::Triangle_2(pb[0], pb[1], pb[2]));
+    case 1: {
+      const int i = ia[0], j = ib[0];
+      return AxisPlane::angles_meet(pa[i], pa[(i + 1) % 3], pa[(i + 2) % 3], pb[(j + 1) % 3], pb[(j + 2) % 3]);
+    }
+    case 2: {  // coplanar_orientation(p, q, r, s) == POSITIVE: r and s on one side of pq
+      const auto &p = pa[ia[0]], &q = pa[ia[1]];
+      return CGAL::orientation(p, q, pa[3 - ia[0] - ia[1]]) == CGAL::orientation(p, q, pb[3 - ib[0] - ib[1]]);
+    }
+    default:
+      return true;
+  }
+}
+
 }  // namespace
 
 template <class K>
@@ -303,6 +370,8 @@ bool faces_intersect(const Tri<K>& a, const Tri<K>& b) {
   // first; pairs the filter shows apart are answered at once.
   bool certify_first = true;
   if constexpr (std::is_same_v<K, InputKernel>) {
+    if (const int axis = common_axis_plane(a, b); axis >= 0)
+      return faces_intersect_in_axis_plane(a, b, axis, shared, ia, ib);
     const Sides sides = static_sides(a, b);
     if (sides == Sides::apart) return false;
     certify_first = sides == Sides::uncertain;
