@@ -2334,35 +2334,50 @@ class BoundedDecimation {
   /// shortest edge"; seen: a fan edge crossing a chord of the ring 1e-16
   /// apart, and a ring vertex 1e-16 over a new triangle: the surface folded
   /// flat on itself there)? A box test first.
-  bool leaves_near_pairs(const Candidate& c, const std::vector<vertex_descriptor>& near) const {
+  bool leaves_near_pairs(const Candidate& c, const std::vector<vertex_descriptor>& near) {
     const double shortest = tetgen_shortest_edge();
     const vertex_descriptor v = mesh_.source(c.h), u = mesh_.target(c.h);
     auto in_near = [&](vertex_descriptor w) { return std::binary_search(near.begin(), near.end(), w); };
-    auto apart = [&](std::initializer_list<const Point3d*> x, std::initializer_list<const Point3d*> y) {
-      for (int k = 0; k < 3; ++k) {
-        double xl = HUGE_VAL, xh = -HUGE_VAL, yl = HUGE_VAL, yh = -HUGE_VAL;
-        for (const Point3d* p : x) xl = std::min(xl, (*p)[k]), xh = std::max(xh, (*p)[k]);
-        for (const Point3d* p : y) yl = std::min(yl, (*p)[k]), yh = std::max(yh, (*p)[k]);
-        if (yl - xh > shortest || xl - yh > shortest) return true;
-      }
+    // Boxes more than the shortest edge apart on an axis hold nothing that
+    // close: the new triangles' and edges' boxes made once, a chord's once.
+    auto apart = [shortest](const Region& x, const Region& y) {
+      for (int k = 0; k < 3; ++k)
+        if (y.lo[k] - x.hi[k] > shortest || x.lo[k] - y.hi[k] > shortest) return true;
       return false;
     };
+    auto box = [&](std::initializer_list<vertex_descriptor> corners) {
+      Region b;
+      for (vertex_descriptor x : corners) grow(b, at(x), b.count++ == 0);
+      return b;
+    };
+    std::vector<Region>& triangle_boxes = triangle_boxes_;
+    std::vector<Region>& edge_boxes = edge_boxes_;  // the new edges x-u, by outer_
+    triangle_boxes.clear();
+    edge_boxes.clear();
+    for (const auto& t : c.proposed) triangle_boxes.push_back(box({t[0], t[1], t[2]}));
+    for (vertex_descriptor x : outer_) edge_boxes.push_back(box({x, u}));
+    Region fan;
+    fan.lo = fan_lo_;
+    fan.hi = fan_hi_;
     for (vertex_descriptor w : near) {
       if (w == u || w == v) continue;
       const bool w_near = near_fan(at(w));
+      const Region point = box({w});
       for (std::size_t i = 0; w_near && i < c.proposed.size(); ++i) {  // w near a new triangle
         const auto& t = c.proposed[i];
         if (w == t[0] || w == t[1] || w == t[2]) continue;
-        const Point3d &a = at(t[0]), &b = at(t[1]), &d = at(t[2]), &p = at(w);
-        if (!apart({&a, &b, &d}, {&p}) && point_closer_than_to_triangle(p, a, b, d, shortest)) return true;
+        if (!apart(triangle_boxes[i], point) &&
+            point_closer_than_to_triangle(at(w), at(t[0]), at(t[1]), at(t[2]), shortest))
+          return true;
       }
       for (vertex_descriptor z : CGAL::vertices_around_target(mesh_.halfedge(w), mesh_)) {
         if (z <= w || z == u || z == v || !in_near(z)) continue;  // each chord w z once
-        if (!w_near && !near_fan(at(z)) && apart({&at(w), &at(z)}, {&fan_lo_, &fan_hi_})) continue;
-        for (vertex_descriptor x : outer_) {  // the new edges x-u
+        const Region chord = box({w, z});
+        if (!w_near && !near_fan(at(z)) && apart(chord, fan)) continue;
+        for (std::size_t i = 0; i < outer_.size(); ++i) {  // the new edges x-u
+          const vertex_descriptor x = outer_[i];
           if (x == w || x == z) continue;
-          const Point3d &a = at(x), &b = at(u), &p = at(w), &q = at(z);
-          if (!apart({&a, &b}, {&p, &q}) && segments_closer_than(a, b, p, q, shortest)) return true;
+          if (!apart(edge_boxes[i], chord) && segments_closer_than(at(x), at(u), at(w), at(z), shortest)) return true;
         }
       }
     }
@@ -2492,6 +2507,7 @@ class BoundedDecimation {
   std::vector<Point3d> at_;
   // try_collapse's scratch buffers
   std::vector<vertex_descriptor> guarded_, outer_;  // guarded()'s vertices, the fan's outer ones
+  std::vector<Region> triangle_boxes_, edge_boxes_;  // leaves_near_pairs()'s
   Point3d fan_lo_{}, fan_hi_{};                     // and the fan's box
   std::vector<face_descriptor> star_;
   std::vector<Candidate> candidates_;
@@ -3319,7 +3335,8 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     // So the coarsened surface is checked exactly; the extracted vertices
     // within reach of a face that intersects are left where they are, and
     // the coarsening is done again. The extracted surface itself, the last
-    // resort, intersects nothing: its pieces lie in their own tetrahedra.
+    // resort, intersects nothing: its pieces lie in their own tetrahedra
+    // (so a coarsening that collapsed nothing needs no check).
     for (int attempt = 0;; ++attempt) {
       std::vector<OutVertex> coarse_vertices;
       std::vector<Tri> coarse_tris;
@@ -3328,7 +3345,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
       Soup coarse;
       for (const OutVertex& v : coarse_vertices) coarse.points.push_back(v.p);
       for (const Tri& t : coarse_tris) coarse.add_triangle(t[0], t[1], t[2]);
-      const std::vector<FacePair> folds = find_self_intersections(coarse);
+      const std::vector<FacePair> folds = collapses > 0 ? find_self_intersections(coarse) : std::vector<FacePair>();
       if (folds.empty()) {
         r.collapses = collapses;
         vertices = std::move(coarse_vertices);
