@@ -2148,6 +2148,12 @@ class BoundedDecimation {
     return normal(at(mesh_.source(o)), at(mesh_.target(o)), at(mesh_.target(mesh_.next(o))));
   }
 
+  /// A face of the star round v (try_collapse()).
+  struct StarFace {
+    vertex_descriptor a, b;  // its corners after v, in order
+    Point3d normal, across;  // its normal; the normal across its edge a b (zero on a border)
+  };
+
   struct Candidate {
     halfedge_descriptor h;  // v -> u
     double error = 0, quality = 0;
@@ -2167,14 +2173,22 @@ class BoundedDecimation {
 
   bool try_collapse(vertex_descriptor v, double limit) {
     if (kept_.frozen(at(v)) || !in_own_part(v)) return false;
-    std::vector<face_descriptor>& star = star_;  // scratch buffers, reused: most calls make no collapse
+    // The star round v, once for all candidates: each face's outer corners
+    // a, b (in order round v), its normal, and the normal of the face
+    // across its outer edge. Scratch buffers, reused: most calls make no
+    // collapse.
+    std::vector<face_descriptor>& star = star_;
+    std::vector<StarFace>& around = around_;
     star.clear();
+    around.clear();
     double carried = 0, old_quality = HUGE_VAL;
     for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
       const face_descriptor f = mesh_.face(g);
+      const vertex_descriptor a = mesh_.source(g), b = mesh_.target(mesh_.next(g));
       star.push_back(f);
+      around.push_back({a, b, normal(at(a), at(v), at(b)), normal_across(mesh_.next(mesh_.next(g)))});
       carried = std::max(carried, data_.error[f]);
-      old_quality = std::min(old_quality, min_angle_quality(at(mesh_.source(g)), at(v), at(mesh_.target(mesh_.next(g)))));
+      old_quality = std::min(old_quality, min_angle_quality(at(a), at(v), at(b)));
     }
     if (carried >= limit) return false;
     std::size_t candidates = 0;
@@ -2199,19 +2213,17 @@ class BoundedDecimation {
       beyond.clear();
       ring.clear();
       removed.clear();
-      for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
-        const vertex_descriptor a = mesh_.source(g), b = mesh_.target(mesh_.next(g));
-        if (a == u || b == u) {  // one of the two faces the collapse removes
-          beyond.push_back({a == u ? b : a, normal_across(mesh_.next(mesh_.next(g)))});
+      for (const StarFace& s : around) {
+        if (s.a == u || s.b == u) {  // one of the two faces the collapse removes
+          beyond.push_back({s.a == u ? s.b : s.a, s.across});
           ring.push_back({0, 0, 0});
           removed.push_back(1);
           continue;
         }
-        const Point3d &pa = at(a), &pu = at(u), &pb = at(b);
-        const Point3d n_old = normal(pa, at(v), pb), n_new = normal(pa, pu, pb);
-        if (dot(n_old, n_new) <= 0.5 * std::sqrt(dot(n_old, n_old) * dot(n_new, n_new)) ||
-            CGAL::collinear(ipoint(pa), ipoint(pu), ipoint(pb)) ||  // the mesh's points are these doubles
-            folded(n_new, normal_across(mesh_.next(mesh_.next(g))))) {
+        const Point3d &pa = at(s.a), &pu = at(u), &pb = at(s.b);
+        const Point3d n_new = normal(pa, pu, pb);
+        if (dot(s.normal, n_new) <= 0.5 * std::sqrt(dot(s.normal, s.normal) * dot(n_new, n_new)) ||
+            folded(n_new, s.across)) {
           ok = false;
           break;
         }
@@ -2219,7 +2231,7 @@ class BoundedDecimation {
         removed.push_back(0);
         c.quality = std::min(c.quality, min_angle_quality(pa, pu, pb));
         d2 = std::min(d2, detail::squared_distance_to_triangle(at(v), pa, pu, pb));
-        c.proposed.push_back({a, u, b});
+        c.proposed.push_back({s.a, u, s.b});
       }
       for (std::size_t i = 0; ok && i < ring.size(); ++i) {
         const std::size_t j = (i + 1) % ring.size();
@@ -2244,6 +2256,11 @@ class BoundedDecimation {
       // Never make the worst triangle much worse than the star's (needles
       // are what TetGen and users stumble on).
       if (c.error > limit || c.quality < std::min(old_quality, 0.004)) continue;
+      // No new face degenerate: exact, on the mesh's points (these doubles),
+      // asked last (the measured tests above reject most candidates).
+      for (std::size_t i = 0; ok && i < c.proposed.size(); ++i)
+        ok = !CGAL::collinear(ipoint(at(c.proposed[i][0])), ipoint(at(u)), ipoint(at(c.proposed[i][2])));
+      if (!ok) continue;
       ++candidates;
     }
     std::sort(candidates_.begin(), candidates_.begin() + std::ptrdiff_t(candidates),
@@ -2510,6 +2527,7 @@ class BoundedDecimation {
   std::vector<Region> triangle_boxes_, edge_boxes_;  // leaves_near_pairs()'s
   Point3d fan_lo_{}, fan_hi_{};                     // and the fan's box
   std::vector<face_descriptor> star_;
+  std::vector<StarFace> around_;
   std::vector<Candidate> candidates_;
   std::vector<std::pair<vertex_descriptor, Point3d>> beyond_;
   std::vector<Point3d> ring_;
