@@ -1566,36 +1566,21 @@ class PlanarCoarsening {
   }
 
   /// Only vertices whose second ring (all that deciding and making a
-  /// collapse reads and changes) is in `part` collapse; for the seam, only
-  /// the seam's vertices are tried first, and whatever their collapses
-  /// change after them (coarsen_planar()).
+  /// collapse reads and changes) is in `part` (below or above) collapse
+  /// (coarsen_planar()).
   void restrict_to(const Plane& plane, Part part) { side_ = Side{plane, part}; }
 
   /// Tries every vertex (of the part), and again the neighbours of each
   /// collapse, until none is left; returns the collapses made.
-  std::size_t run() {
+  std::size_t run() { return run({mesh_.vertices().begin(), mesh_.vertices().end()}); }
+  /// The same from the seam's vertices (whose second ring crosses `plane`)
+  /// only, on the whole surface: then whatever their collapses change.
+  std::size_t run_seam(const Plane& plane) {
     std::vector<SVertex> work;
     for (SVertex v : mesh_.vertices())
-      if (!side_ || side_->part != Part::seam || in_own_part(v)) work.push_back(v);
-    if (side_ && side_->part == Part::seam) side_.reset();
-    std::vector<char> queued(mesh_.number_of_vertices() + mesh_.number_of_removed_vertices(), 0);
-    for (SVertex v : work) queued[v] = 1;
-    std::size_t collapses = 0;
-    while (!work.empty()) {
-      const SVertex v = work.back();
-      work.pop_back();
-      queued[v] = 0;
-      if (mesh_.is_removed(v)) continue;
-      const SVertex kept = try_collapse(v);
-      if (kept == SMesh::null_vertex()) continue;
-      ++collapses;
-      for (SVertex u : CGAL::vertices_around_target(mesh_.halfedge(kept), mesh_))
-        if (!queued[u]) {
-          queued[u] = 1;
-          work.push_back(u);
-        }
-    }
-    return collapses;
+      if (second_ring_in(mesh_, v, plane, Part::seam, [&](SVertex w) { return mesh_.point(w)[plane.axis]; }))
+        work.push_back(v);
+    return run(std::move(work));
   }
 
   /// The coarsened surface: points and triangles, with each vertex's facet
@@ -1663,6 +1648,29 @@ class PlanarCoarsening {
   bool in_own_part(SVertex v) const {
     return !side_ || second_ring_in(mesh_, v, side_->plane, side_->part,
                                     [&](SVertex w) { return mesh_.point(w)[side_->plane.axis]; });
+  }
+
+  /// Tries the vertices of `work` (last first), and again the neighbours of
+  /// each collapse, until none is left.
+  std::size_t run(std::vector<SVertex> work) {
+    std::vector<char> queued(mesh_.number_of_vertices() + mesh_.number_of_removed_vertices(), 0);
+    for (SVertex v : work) queued[v] = 1;
+    std::size_t collapses = 0;
+    while (!work.empty()) {
+      const SVertex v = work.back();
+      work.pop_back();
+      queued[v] = 0;
+      if (mesh_.is_removed(v)) continue;
+      const SVertex kept = try_collapse(v);
+      if (kept == SMesh::null_vertex()) continue;
+      ++collapses;
+      for (SVertex u : CGAL::vertices_around_target(mesh_.halfedge(kept), mesh_))
+        if (!queued[u]) {
+          queued[u] = 1;
+          work.push_back(u);
+        }
+    }
+    return collapses;
   }
 
   SVertex try_collapse(SVertex v) {
@@ -1855,8 +1863,7 @@ std::size_t coarsen_planar(const Facets& f, const std::vector<OutVertex>& vertic
         joined_tris.push_back(half[s]->corners(fc, [&, s = s](SVertex w) { return id[sub_vertex[s][w]]; }));
   }
   PlanarCoarsening seam(f, joined_vertices, joined_on_plane, joined_tris, diagonal);
-  seam.restrict_to(plane, Part::seam);
-  made += seam.run();
+  made += seam.run_seam(plane);
   seam.result(out_vertices, out_on_plane, out_tris);
   return made;
 }
