@@ -1,7 +1,7 @@
 // polyheal — the generalised winding number of a triangle soup (Jacobson et
 // al. 2013), hierarchically (Barill et al. 2018): far clusters by their
-// dipole term, near triangles by their exact solid angle (Van Oosterom &
-// Strackee). A measurement in doubles: it labels (grid corners, which side
+// expansion to second order, near triangles by their exact solid angle (Van
+// Oosterom & Strackee). A measurement in doubles: it labels (grid corners, which side
 // of a surface a sheet lies on), it decides no geometric predicate of an
 // output.
 #pragma once
@@ -35,6 +35,7 @@ class WindingNumber {
  private:
   struct Node {
     Point3d center{}, normal{};  // area-weighted centroid; sum of area vectors
+    std::array<double, 9> moment{};  // sum of area vector x (centroid - center), row-major
     double radius = 0;
     std::ptrdiff_t left = -1;    // children left, left + 1
     std::size_t first = 0, last = 0;
