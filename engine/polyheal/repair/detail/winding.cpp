@@ -55,8 +55,9 @@ double WindingNumber::evaluate(const Point3d& q, double beta) const {
     const double d[3] = {n.center[0] - q[0], n.center[1] - q[1], n.center[2] - q[2]};
     const double r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
     if (r2 > beta * beta * n.radius * n.radius) {
-      // Barill et al. 2018, §3: the cluster's area vectors expanded about
-      // its centre c to second order; with r = c - q,
+      // The far field's Taylor expansion (Barill et al. 2018): the
+      // cluster's area vectors about its centre c, to second order; with
+      // r = c - q,
       //   N.r / |r|^3 + tr(M) / |r|^3 - 3 r.M r / |r|^5,
       // N the sum of the area vectors a n, M the sum of a n (x - c)^T over
       // the triangles (exact with their centroids x at second order).
