@@ -2308,25 +2308,25 @@ class BoundedDecimation {
     // grown by TetGen's shortest edge (more than its relative tolerance
     // times any edge): nothing outside comes that close.
     outer_.clear();
-    Region fan;
+    fan_ = Region{};
     for (const auto& t : c.proposed) {
       outer_.push_back(t[0]);
       outer_.push_back(t[2]);
-      for (vertex_descriptor x : t) grow(fan, at(x), fan.count++ == 0);
+      for (vertex_descriptor x : t) grow(fan_, at(x), fan_.count++ == 0);
     }
     std::sort(outer_.begin(), outer_.end());
     outer_.erase(std::unique(outer_.begin(), outer_.end()), outer_.end());
     const double shortest = tetgen_shortest_edge();
     for (int k = 0; k < 3; ++k) {
-      fan_lo_[k] = fan.lo[k] - shortest;
-      fan_hi_[k] = fan.hi[k] + shortest;
+      fan_.lo[k] -= shortest;
+      fan_.hi[k] += shortest;
     }
     return near;
   }
   /// Inside the fan's grown box (guarded()).
   bool near_fan(const Point3d& p) const {
     for (int k = 0; k < 3; ++k)
-      if (p[k] < fan_lo_[k] || p[k] > fan_hi_[k]) return false;
+      if (p[k] < fan_.lo[k] || p[k] > fan_.hi[k]) return false;
     return true;
   }
 
@@ -2380,9 +2380,6 @@ class BoundedDecimation {
     edge_boxes.clear();
     for (const auto& t : c.proposed) triangle_boxes.push_back(box({t[0], t[1], t[2]}));
     for (vertex_descriptor x : outer_) edge_boxes.push_back(box({x, u}));
-    Region fan;
-    fan.lo = fan_lo_;
-    fan.hi = fan_hi_;
     for (vertex_descriptor w : near) {
       if (w == u || w == v) continue;
       const bool w_near = near_fan(at(w));
@@ -2397,7 +2394,7 @@ class BoundedDecimation {
       for (vertex_descriptor z : CGAL::vertices_around_target(mesh_.halfedge(w), mesh_)) {
         if (z <= w || z == u || z == v || !in_near(z)) continue;  // each chord w z once
         const Region chord = box({w, z});
-        if (!w_near && !near_fan(at(z)) && apart(chord, fan)) continue;
+        if (!w_near && !near_fan(at(z)) && apart(chord, fan_)) continue;
         for (std::size_t i = 0; i < outer_.size(); ++i) {  // the new edges x-u
           const vertex_descriptor x = outer_[i];
           if (x == w || x == z) continue;
@@ -2532,7 +2529,7 @@ class BoundedDecimation {
   // try_collapse's scratch buffers
   std::vector<vertex_descriptor> guarded_, outer_;  // guarded()'s vertices, the fan's outer ones
   std::vector<Region> triangle_boxes_, edge_boxes_;  // leaves_near_pairs()'s
-  Point3d fan_lo_{}, fan_hi_{};                     // and the fan's box
+  Region fan_;                                      // and the fan's box (grown)
   std::vector<face_descriptor> star_;
   std::vector<StarFace> around_;
   std::vector<Candidate> candidates_;
@@ -3374,10 +3371,13 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
       std::vector<Tri> coarse_tris;
       const std::size_t collapses =
           coarsen_planar(f, vertices, on_plane, tris, options.halves_in_parallel, coarse_vertices, coarse_tris);
-      Soup coarse;
-      for (const OutVertex& v : coarse_vertices) coarse.points.push_back(v.p);
-      for (const Tri& t : coarse_tris) coarse.add_triangle(t[0], t[1], t[2]);
-      const std::vector<FacePair> folds = collapses > 0 ? find_self_intersections(coarse) : std::vector<FacePair>();
+      std::vector<FacePair> folds;
+      if (collapses > 0) {
+        Soup coarse;
+        for (const OutVertex& v : coarse_vertices) coarse.points.push_back(v.p);
+        for (const Tri& t : coarse_tris) coarse.add_triangle(t[0], t[1], t[2]);
+        folds = find_self_intersections(coarse);
+      }
       if (folds.empty()) {
         r.collapses = collapses;
         vertices = std::move(coarse_vertices);
