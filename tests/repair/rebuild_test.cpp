@@ -155,6 +155,42 @@ TEST_CASE("rebuild: a box of separate patches with gaps, overlaps, T-junctions a
   CHECK(std::abs(volume(raw.soup) - volume(out)) < 0.25 * r.cell * 600);
 }
 
+TEST_CASE("rebuild: the shell round a flat sheet is coarsened without moving it", "[rebuild]") {
+  // CGAL's quads_to_stitch: a 1 x 2 sheet of quads in z = 0, its two rows
+  // not sharing their vertices. Its shell's broad faces lie in planes of the
+  // grid, on no facet: a vertex there and its ring share their z exactly,
+  // so the vertex collapses as on a facet plane (before, none did here).
+  Soup in;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 2; ++j)
+      quad(in, {0.25 * i, 1.0 * j, 0}, {0.25 * (i + 1), 1.0 * j, 0}, {0.25 * (i + 1), 1.0 * (j + 1), 0},
+           {0.25 * i, 1.0 * (j + 1), 0});
+  RebuildOptions none, planar;
+  none.simplify = none.decimate = planar.decimate = false;
+  none.certify = planar.certify = false;
+  const RebuildResult raw = rebuild(in, none), flat = rebuild(in, planar);
+  REQUIRE(raw.report.sheet_facets == 16);
+  CHECK(flat.report.collapses > raw.soup.points.size() / 4);  // 43% of the vertices are on a broad face
+  CHECK(flat.soup.face_count() == raw.soup.face_count() - 2 * flat.report.collapses);
+  CHECK(inspect(flat.soup).certified_clean());
+  // The same surface: the same volume, and the centroid and edge midpoints
+  // of every face of each on the other.
+  CHECK(std::abs(volume(raw.soup) - volume(flat.soup)) < 1e-12 * volume(raw.soup));
+  double worst = 0;
+  for (const Soup* s : {&raw.soup, &flat.soup}) {
+    const detail::SurfaceDistance other(s == &raw.soup ? flat.soup : raw.soup);
+    for (std::size_t t = 0; t < s->face_count(); ++t) {
+      const Point3d &a = s->points[s->face(t)[0]], &b = s->points[s->face(t)[1]], &c = s->points[s->face(t)[2]];
+      for (const Point3d& x : {Point3d{(a[0] + b[0] + c[0]) / 3, (a[1] + b[1] + c[1]) / 3, (a[2] + b[2] + c[2]) / 3},
+                               Point3d{(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2},
+                               Point3d{(b[0] + c[0]) / 2, (b[1] + c[1]) / 2, (b[2] + c[2]) / 2},
+                               Point3d{(c[0] + a[0]) / 2, (c[1] + a[1]) / 2, (c[2] + a[2]) / 2}})
+        worst = std::max(worst, other.squared_distance(x));
+    }
+  }
+  CHECK(std::sqrt(worst) < 1e-12);
+}
+
 TEST_CASE("rebuild: decimating in two halves at once is decimating them one after the other", "[rebuild]") {
   // Large surfaces are coarsened and decimated in two halves at once, each a
   // mesh of its own, joined again, then the seam between them (the halves

@@ -1500,6 +1500,12 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
 // are rounded, so three of them make a sliver the exact test sees as a
 // triangle; check --tetgen-ready counts them), and the link condition holds:
 // the new fan tiles the same polygon, so the surface is unchanged.
+// A vertex whose star lies in one axis-aligned plane — the vertex and its
+// ring share a coordinate exactly, on their own doubles — collapses the same
+// way, facet or not: the faces of a shell round a sheet, or of a part, along
+// the grid's planes (quads_to_stitch: 43% of the extracted vertices, none on
+// a facet). Its star is in that plane exactly, so its new fan tiles the same
+// polygon exactly, with no rounding.
 
 using SMesh = CGAL::Surface_mesh<IPoint>;
 using SVertex = SMesh::Vertex_index;
@@ -1548,13 +1554,19 @@ bool second_ring_in(const M& mesh, typename M::Vertex_index v, const Plane& plan
   return false;
 }
 
+/// What a vertex may do in the planar coarsening: nothing (kept regions'
+/// points, and those near a fold the coarsening made), collapse where its
+/// star lies in one axis-aligned plane, or also where it lies in one facet
+/// plane (a facet crossing, not clamped).
+enum Mobility : char { kFixed = 0, kFlat = 1, kOnFacet = 2 };
+
 class PlanarCoarsening {
  public:
   /// `diagonal`: of the whole surface's points (TetGen's shortest edge, which
   /// the new triangles keep to, is relative to it).
-  PlanarCoarsening(const Facets& f, const std::vector<OutVertex>& vertices, const std::vector<char>& on_plane,
+  PlanarCoarsening(const Facets& f, const std::vector<OutVertex>& vertices, const std::vector<char>& mobility,
                    const std::vector<Tri>& tris, double diagonal)
-      : f_(f), on_plane_(on_plane) {  // copied: collapses update it
+      : f_(f), mobility_(mobility) {  // copied: collapses update it
     for (const OutVertex& v : vertices) {
       mesh_.add_vertex(ipoint(v.p));
       facet_.push_back(v.facet);
@@ -1584,16 +1596,16 @@ class PlanarCoarsening {
   }
 
   /// The coarsened surface: points and triangles, with each vertex's facet
-  /// and whether it may collapse. Vertex and face ids are the indices into
+  /// and Mobility. Vertex and face ids are the indices into
   /// the vectors the mesh was made of; the removed ones are left out.
-  void result(std::vector<OutVertex>& vertices, std::vector<char>& on_plane, std::vector<Tri>& tris) const {
+  void result(std::vector<OutVertex>& vertices, std::vector<char>& mobility, std::vector<Tri>& tris) const {
     std::vector<Index> id(mesh_.number_of_vertices() + mesh_.number_of_removed_vertices(), 0);
     vertices.clear();
-    on_plane.clear();
+    mobility.clear();
     for (SVertex v : mesh_.vertices()) {
       id[v] = static_cast<Index>(vertices.size());
       vertices.push_back(vertex(v));
-      on_plane.push_back(on_plane_[v]);
+      mobility.push_back(mobility_[v]);
     }
     tris.clear();
     for (auto fc : mesh_.faces()) tris.push_back(corners(fc, [&](SVertex v) { return id[v]; }));
@@ -1604,7 +1616,7 @@ class PlanarCoarsening {
     const IPoint& p = mesh_.point(v);
     return {{p.x(), p.y(), p.z()}, facet_[v]};
   }
-  bool on_plane(SVertex v) const { return on_plane_[v]; }
+  char mobility(SVertex v) const { return mobility_[v]; }
   /// Face fc's corners, named by `id(vertex)`, from its halfedge's source.
   template <class Id>
   Tri corners(SMesh::Face_index fc, Id id) const {
@@ -1645,6 +1657,16 @@ class PlanarCoarsening {
   }
   static Point3d pt(const IPoint& p) { return {p.x(), p.y(), p.z()}; }
 
+  /// The axis along which v and its `ring` share their coordinate (on the
+  /// doubles: exact); -1 when there is none.
+  int flat_axis(SVertex v, const std::vector<SVertex>& ring) const {
+    const IPoint& p = mesh_.point(v);
+    for (int axis = 2; axis >= 0; --axis)
+      if (std::all_of(ring.begin(), ring.end(), [&](SVertex u) { return mesh_.point(u)[axis] == p[axis]; }))
+        return axis;
+    return -1;
+  }
+
   bool in_own_part(SVertex v) const {
     return !side_ || second_ring_in(mesh_, v, side_->plane, side_->part,
                                     [&](SVertex w) { return mesh_.point(w)[side_->plane.axis]; });
@@ -1674,14 +1696,18 @@ class PlanarCoarsening {
   }
 
   SVertex try_collapse(SVertex v) {
-    if (!on_plane_[v] || !in_own_part(v)) return SMesh::null_vertex();
-    const std::int64_t plane = facet_[v];
-    std::vector<SVertex> ring;
-    for (SVertex u : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_)) {
-      if (!on_plane_[u] || !coplanar(plane, facet_[u])) return SMesh::null_vertex();
-      ring.push_back(u);
+    if (mobility_[v] == kFixed || !in_own_part(v)) return SMesh::null_vertex();
+    std::vector<SVertex>& ring = ring_;
+    ring.clear();
+    for (SVertex u : CGAL::vertices_around_target(mesh_.halfedge(v), mesh_)) ring.push_back(u);
+    int axis = flat_axis(v, ring);
+    if (axis < 0) {  // on one facet plane?
+      if (mobility_[v] != kOnFacet) return SMesh::null_vertex();
+      const std::int64_t plane = facet_[v];
+      for (SVertex u : ring)
+        if (mobility_[u] != kOnFacet || !coplanar(plane, facet_[u])) return SMesh::null_vertex();
+      axis = projection_axis(plane);
     }
-    const int axis = projection_axis(plane);
     // The star's orientation in the plane (all its triangles must agree).
     CGAL::Orientation star = CGAL::ZERO;
     for (auto h : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
@@ -1723,11 +1749,13 @@ class PlanarCoarsening {
     if (best == SMesh::null_halfedge()) return SMesh::null_vertex();
     const SVertex u = mesh_.target(best);
     const IPoint keep = mesh_.point(u);
+    const std::int64_t keep_facet = facet_[u];
+    const char keep_mobility = mobility_[u];
     // collapse_edge keeps one of the two vertices; put u's point on it.
     const SVertex kept = CGAL::Euler::collapse_edge(mesh_.edge(best), mesh_);
     mesh_.point(kept) = keep;
-    facet_[kept] = facet_[u];
-    on_plane_[kept] = 1;
+    facet_[kept] = keep_facet;
+    mobility_[kept] = keep_mobility;
     return kept;
   }
 
@@ -1765,15 +1793,16 @@ class PlanarCoarsening {
   double shortest_edge_ = 0;
   std::optional<Side> side_;
   const Facets& f_;
-  std::vector<char> on_plane_;
+  std::vector<char> mobility_;
   std::unordered_map<std::uint64_t, bool> coplanar_;
-  std::vector<std::pair<double, SMesh::Halfedge_index>> candidates_;  // try_collapse's, reused
+  std::vector<SVertex> ring_;                                         // try_collapse's, reused
+  std::vector<std::pair<double, SMesh::Halfedge_index>> candidates_;  // too
   SMesh mesh_;
   std::vector<std::int64_t> facet_;
 };
 
-/// The planar coarsening of a surface (`on_plane`: the vertices that may
-/// collapse) into `out_vertices`, `out_tris`; returns the collapses made.
+/// The planar coarsening of a surface (`mobility`: what each vertex may
+/// do) into `out_vertices`, `out_tris`; returns the collapses made.
 /// A large surface is coarsened on its two halves at once, as the
 /// decimation is (sweep_in_halves()): split at the points' median plane,
 /// each half a mesh of the faces with a corner on its side, where a vertex
@@ -1782,7 +1811,7 @@ class PlanarCoarsening {
 /// halves are joined vertex for vertex and face for face in the surface's
 /// order — what the same runs make of it one after the other (`parallel`
 /// false, for tests) — and the seam's vertices are tried last, on the whole.
-std::size_t coarsen_planar(const Facets& f, const std::vector<OutVertex>& vertices, const std::vector<char>& on_plane,
+std::size_t coarsen_planar(const Facets& f, const std::vector<OutVertex>& vertices, const std::vector<char>& mobility,
                            const std::vector<Tri>& tris, bool parallel, std::vector<OutVertex>& out_vertices,
                            std::vector<Tri>& out_tris) {
   constexpr std::size_t kSplitFrom = 4096;  // vertices that may collapse: below, a run costs little
@@ -1790,25 +1819,25 @@ std::size_t coarsen_planar(const Facets& f, const std::vector<OutVertex>& vertic
   for (const OutVertex& v : vertices) points.push_back(v.p);
   const Region box = bounds(points);
   const double diagonal = dist(box.lo, box.hi);
-  std::vector<char> out_on_plane;
-  if (std::size_t(std::count(on_plane.begin(), on_plane.end(), 1)) < kSplitFrom) {
-    PlanarCoarsening whole(f, vertices, on_plane, tris, diagonal);
+  std::vector<char> out_mobility;
+  if (std::size_t(std::count_if(mobility.begin(), mobility.end(), [](char m) { return m != kFixed; })) < kSplitFrom) {
+    PlanarCoarsening whole(f, vertices, mobility, tris, diagonal);
     const std::size_t made = whole.run();
-    whole.result(out_vertices, out_on_plane, out_tris);
+    whole.result(out_vertices, out_mobility, out_tris);
     return made;
   }
   const Plane plane = median_plane(points);
   std::vector<OutVertex> joined_vertices;
-  std::vector<char> joined_on_plane;
+  std::vector<char> joined_mobility;
   std::vector<Tri> joined_tris;
   std::size_t made = 0;
   if (!parallel) {
-    PlanarCoarsening whole(f, vertices, on_plane, tris, diagonal);
+    PlanarCoarsening whole(f, vertices, mobility, tris, diagonal);
     for (Part part : {Part::below, Part::above}) {
       whole.restrict_to(plane, part);
       made += whole.run();
     }
-    whole.result(joined_vertices, joined_on_plane, joined_tris);
+    whole.result(joined_vertices, joined_mobility, joined_tris);
   } else {
     // half s's vertex i is vertices[sub_vertex[s][i]], its face j tris[sub_face[s][j]]
     std::vector<Index> sub_vertex[2], sub_face[2];
@@ -1825,17 +1854,17 @@ std::size_t coarsen_planar(const Facets& f, const std::vector<OutVertex>& vertic
       }
       std::vector<Index> local(vertices.size(), kNoIndex);
       std::vector<OutVertex> half_vertices;
-      std::vector<char> half_on_plane;
+      std::vector<char> half_mobility;
       for (std::size_t v = 0; v < vertices.size(); ++v)
         if (used[v]) {
           local[v] = Index(sub_vertex[s].size());
           sub_vertex[s].push_back(Index(v));
           half_vertices.push_back(vertices[v]);
-          half_on_plane.push_back(on_plane[v]);
+          half_mobility.push_back(mobility[v]);
         }
       std::vector<Tri> half_tris;
       for (Index t : sub_face[s]) half_tris.push_back({local[tris[t][0]], local[tris[t][1]], local[tris[t][2]]});
-      half[s].emplace(f, half_vertices, half_on_plane, half_tris, diagonal);
+      half[s].emplace(f, half_vertices, half_mobility, half_tris, diagonal);
       half[s]->restrict_to(plane, s == 0 ? Part::below : Part::above);
       half_made[s] = half[s]->run();
     };
@@ -1856,15 +1885,15 @@ std::size_t coarsen_planar(const Facets& f, const std::vector<OutVertex>& vertic
       if (s < 0) continue;
       id[v] = Index(joined_vertices.size());
       joined_vertices.push_back(half[s]->vertex(w));
-      joined_on_plane.push_back(half[s]->on_plane(w));
+      joined_mobility.push_back(half[s]->mobility(w));
     }
     for (const auto& [s, fc] : by_face)
       if (s >= 0)
         joined_tris.push_back(half[s]->corners(fc, [&, s = s](SVertex w) { return id[sub_vertex[s][w]]; }));
   }
-  PlanarCoarsening seam(f, joined_vertices, joined_on_plane, joined_tris, diagonal);
+  PlanarCoarsening seam(f, joined_vertices, joined_mobility, joined_tris, diagonal);
   made += seam.run_seam(plane);
-  seam.result(out_vertices, out_on_plane, out_tris);
+  seam.result(out_vertices, out_mobility, out_tris);
   return made;
 }
 
@@ -3354,11 +3383,13 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   t0 = std::chrono::steady_clock::now();
   if (options.simplify) {
     if (obs) obs->stage("coarsening planar regions");
-    std::vector<char> on_plane(vertices.size(), 0);
+    std::vector<char> mobility(vertices.size(), 0);
     for (std::size_t v = 0; v < vertices.size(); ++v)
-      on_plane[v] = vertices[v].facet >= 0 && !vertices[v].clamped && !kept.frozen(vertices[v].p);
-    // The collapses keep the surface as a point set only up to the rounding
-    // of its vertices, which lie near (not on) their facets' planes: where
+      mobility[v] = kept.frozen(vertices[v].p)                      ? kFixed
+                    : vertices[v].facet >= 0 && !vertices[v].clamped ? kOnFacet
+                                                                     : kFlat;
+    // The collapses on a facet plane keep the surface as a point set only up
+    // to the rounding of its vertices, which lie near (not on) that plane: where
     // nearly degenerate triangles meet at a crease (refined grids make
     // many), a fan that tiles its polygon in projection can fold in space.
     // So the coarsened surface is checked exactly; the extracted vertices
@@ -3370,7 +3401,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
       std::vector<OutVertex> coarse_vertices;
       std::vector<Tri> coarse_tris;
       const std::size_t collapses =
-          coarsen_planar(f, vertices, on_plane, tris, options.halves_in_parallel, coarse_vertices, coarse_tris);
+          coarsen_planar(f, vertices, mobility, tris, options.halves_in_parallel, coarse_vertices, coarse_tris);
       std::vector<FacePair> folds;
       if (collapses > 0) {
         Soup coarse;
@@ -3402,7 +3433,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
         for (const Region& b : reach)
           if (vertices[v].p[0] >= b.lo[0] && vertices[v].p[0] <= b.hi[0] && vertices[v].p[1] >= b.lo[1] &&
               vertices[v].p[1] <= b.hi[1] && vertices[v].p[2] >= b.lo[2] && vertices[v].p[2] <= b.hi[2])
-            on_plane[v] = 0;
+            mobility[v] = kFixed;
     }
   }
   Soup& out = result.soup;
