@@ -3396,7 +3396,11 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     // within reach of a face that intersects are left where they are, and
     // the coarsening is done again. The extracted surface itself, the last
     // resort, intersects nothing: its pieces lie in their own tetrahedra
-    // (so a coarsening that collapsed nothing needs no check).
+    // (so a coarsening that collapsed nothing needs no check, and only pairs
+    // with a face it made are searched, where few are new).
+    Soup before;
+    for (const OutVertex& v : vertices) before.points.push_back(v.p);
+    for (const Tri& t : tris) before.add_triangle(t[0], t[1], t[2]);
     for (int attempt = 0;; ++attempt) {
       std::vector<OutVertex> coarse_vertices;
       std::vector<Tri> coarse_tris;
@@ -3407,7 +3411,8 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
         Soup coarse;
         for (const OutVertex& v : coarse_vertices) coarse.points.push_back(v.p);
         for (const Tri& t : coarse_tris) coarse.add_triangle(t[0], t[1], t[2]);
-        folds = find_self_intersections(coarse);
+        std::optional<std::vector<FacePair>> new_pairs = find_self_intersections_from(coarse, before, {});
+        folds = new_pairs ? std::move(*new_pairs) : find_self_intersections(coarse);
       }
       if (folds.empty()) {
         r.collapses = collapses;
