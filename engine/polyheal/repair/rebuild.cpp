@@ -761,7 +761,10 @@ std::vector<FacePair> near_pairs_at_seam(const Soup& joined, const std::vector<T
   return out;
 }
 
-KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, double h,
+/// `sides`: each facet's winding numbers 0.05 h in front of and behind it
+/// (beside()), as the grid's were measured: a facet bounds the volume when
+/// they are below 1/4 and above 3/4.
+KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<double, 2>>& sides, double h,
                                const std::vector<std::array<Point3d, 3>>& avoid, std::vector<OutVertex>& vertices,
                                std::vector<Tri>& tris) {
   KeptRegions kept;
@@ -824,7 +827,7 @@ KeptRegions keep_clean_regions(const Facets& f, const WindingNumber& winding, do
       return;
     }
     Point3d front, back;
-    ok[t] = beside(f, t, 0.05 * h, front, back) && winding(front) < 0.25 && winding(back) > 0.75;
+    ok[t] = beside(f, t, 0.05 * h, front, back) && sides[t][0] < 0.25 && sides[t][1] > 0.75;
   });
   // The caller's defects count as ours (a margin of half or one cell round
   // them kept fewer facets on anchor's offset: the zip gave up the patches
@@ -3012,7 +3015,9 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   // Each facet's winding number just in front of and just behind it: what
   // it bounds. A component mostly facing into a region of negative winding
   // number (inside out, or a cavity of an inside-out part: the rule of
-  // inspect/nesting.h, on a soup) is turned and the field made again.
+  // inspect/nesting.h, on a soup) is turned and the field made again. The
+  // facets stay as they are after that: keep_clean_regions() reads the
+  // same sides.
   std::optional<WindingNumber> field(std::in_place, f.points, f.tris);
   std::vector<std::array<double, 2>> sides(f.tris.size());
   const auto measure_sides = [&] {
@@ -3373,7 +3378,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   KeptRegions kept;
   if (options.keep_regions) {
     if (obs) obs->stage("keeping clean regions");
-    kept = keep_clean_regions(f, winding, g.h, options.avoid, vertices, tris);
+    kept = keep_clean_regions(f, sides, g.h, options.avoid, vertices, tris);
     r.kept_faces = kept.faces;
     r.kept_patches = kept.patches;
     r.patches_given_up = kept.given_up;
