@@ -577,6 +577,11 @@ TEST_CASE("rebuild: a grid finer than the limit is refused", "[rebuild]") {
   o.cell_ratio = 0.0005;
   o.max_cells = 1000;
   CHECK_THROWS_AS(rebuild(read_soup(test::fixture("dirty_box.obj")), o), UnsupportedInput);
+  // ... also where the octree's nodes meet enough facets to be refined in
+  // parallel (256): the refusal comes out of the worker threads.
+  const Soup many = cylinder(64, 8, 1.0, 2.0);
+  REQUIRE(many.face_count() >= 1024);
+  CHECK_THROWS_AS(rebuild(many, o), UnsupportedInput);
 }
 
 TEST_CASE("rebuild: an open sheet beside a solid is wrapped in a shell, or reported lost", "[rebuild]") {

@@ -11,9 +11,11 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -356,7 +358,9 @@ struct Cell {
 };
 
 /// §3.1.1: refine from one root cell, keeping only the cells that meet a
-/// facet (exact triangle-box test on doubles).
+/// facet (exact triangle-box test on doubles). The eight children of a node
+/// that meets many facets are refined at once, each into its own list of
+/// cells, joined in their order: the cells come out as one after the other.
 class Octree {
  public:
   Octree(const Facets& f, const Grid& g, std::size_t max_cells, RebuildReport& r)
@@ -371,13 +375,18 @@ class Octree {
   std::vector<Cell> run(int depth) {
     std::vector<std::uint32_t> all(f_.tris.size());
     std::iota(all.begin(), all.end(), 0);
-    refine(0, 0, 0, std::int64_t(1) << depth, all);
-    return std::move(cells_);
+    std::vector<Cell> cells;
+    refine(0, 0, 0, std::int64_t(1) << depth, all, cells);
+    r_.octree_nodes += nodes_;
+    return cells;
   }
 
  private:
-  void refine(std::int64_t i, std::int64_t j, std::int64_t k, std::int64_t size, const std::vector<std::uint32_t>& in) {
-    ++r_.octree_nodes;
+  static constexpr std::size_t kParallelFrom = 256;  // facets meeting a node
+
+  void refine(std::int64_t i, std::int64_t j, std::int64_t k, std::int64_t size, const std::vector<std::uint32_t>& in,
+              std::vector<Cell>& cells) {
+    ++nodes_;
     const IK::Iso_cuboid_3 box(g_.x(0, i), g_.x(1, j), g_.x(2, k), g_.x(0, i + size), g_.x(1, j + size),
                                g_.x(2, k + size));
     std::vector<std::uint32_t> meet;
@@ -390,14 +399,23 @@ class Octree {
     }
     if (meet.empty()) return;
     if (size == 1) {
-      if (cells_.size() >= max_cells_)
+      if (count_++ >= max_cells_)
         throw UnsupportedInput("the overlay grid exceeds " + std::to_string(max_cells_) +
                                " cells; choose a larger --cell");
-      cells_.push_back({i, j, k, std::move(meet)});
+      cells.push_back({i, j, k, std::move(meet)});
       return;
     }
     const std::int64_t s = size / 2;
-    for (int c = 0; c < 8; ++c) refine(i + (c & 1 ? s : 0), j + (c & 2 ? s : 0), k + (c & 4 ? s : 0), s, meet);
+    auto child = [&](int c, std::vector<Cell>& into) {
+      refine(i + (c & 1 ? s : 0), j + (c & 2 ? s : 0), k + (c & 4 ? s : 0), s, meet, into);
+    };
+    if (meet.size() < kParallelFrom) {
+      for (int c = 0; c < 8; ++c) child(c, cells);
+      return;
+    }
+    std::array<std::vector<Cell>, 8> part;
+    tbb::parallel_for(0, 8, [&](int c) { child(c, part[std::size_t(c)]); });
+    for (std::vector<Cell>& p : part) std::move(p.begin(), p.end(), std::back_inserter(cells));
   }
 
   const Facets& f_;
@@ -406,7 +424,7 @@ class Octree {
   RebuildReport& r_;
   std::vector<IK::Triangle_3> tri_;
   std::vector<CGAL::Bbox_3> box_;
-  std::vector<Cell> cells_;
+  std::atomic<std::size_t> nodes_{0}, count_{0};  // nodes made; cells made
 };
 
 /// True when (a, b, c, d) is an even permutation of (0, 1, 2, 3).
