@@ -1542,15 +1542,22 @@ struct Plane {
   double at;
 };
 
-/// The plane through the points' median along the longest side of their box.
-Plane median_plane(const std::vector<Point3d>& points) {
-  const Region box = bounds(points);
+/// The plane through the median of the points that may move (`moves`, one
+/// flag per point: the others, kept regions' points, make no work for the
+/// halves) along the longest side of their box; of all the points when
+/// none may.
+Plane median_plane(const std::vector<Point3d>& points, const std::vector<char>& moves) {
+  std::vector<Point3d> moving;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (moves[i]) moving.push_back(points[i]);
+  const std::vector<Point3d>& counted = moving.empty() ? points : moving;
+  const Region box = bounds(counted);
   int axis = 0;
   for (int k = 1; k < 3; ++k)
     if (box.hi[k] - box.lo[k] > box.hi[axis] - box.lo[axis]) axis = k;
   std::vector<double> coordinate;
-  coordinate.reserve(points.size());
-  for (const Point3d& p : points) coordinate.push_back(p[axis]);
+  coordinate.reserve(counted.size());
+  for (const Point3d& p : counted) coordinate.push_back(p[axis]);
   const std::size_t n = coordinate.size();
   std::nth_element(coordinate.begin(), coordinate.begin() + std::ptrdiff_t(n / 2), coordinate.end());
   return {axis, coordinate[n / 2]};
@@ -1825,7 +1832,7 @@ class PlanarCoarsening {
 /// The planar coarsening of a surface (`mobility`: what each vertex may
 /// do) into `out_vertices`, `out_tris`; returns the collapses made.
 /// A large surface is coarsened on its two halves at once, as the
-/// decimation is (sweep_in_halves()): split at the points' median plane,
+/// decimation is (sweep_in_halves()): split at median_plane(),
 /// each half a mesh of the faces with a corner on its side, where a vertex
 /// collapses only if its second ring is on that side; neither half reads
 /// what the other changes, and the faces across the plane stay in both. The
@@ -1847,7 +1854,9 @@ std::size_t coarsen_planar(const Facets& f, const std::vector<OutVertex>& vertic
     whole.result(out_vertices, out_mobility, out_tris);
     return made;
   }
-  const Plane plane = median_plane(points);
+  std::vector<char> moves(mobility.size());
+  for (std::size_t v = 0; v < mobility.size(); ++v) moves[v] = mobility[v] != kFixed;
+  const Plane plane = median_plane(points, moves);
   std::vector<OutVertex> joined_vertices;
   std::vector<char> joined_mobility;
   std::vector<Tri> joined_tris;
@@ -2643,8 +2652,8 @@ void compact(Mesh& mesh) {
 
 /// The decimation's sweeps at one threshold (the first, at a quarter of the
 /// tolerance, makes two thirds of all collapses) on the two halves of the
-/// surface at once. The points are split at their median along the longest
-/// side of their box; each half is a mesh of the faces with a corner on its
+/// surface at once. The points are split at the median of those that may
+/// move (median_plane()); each half is a mesh of the faces with a corner on its
 /// side, where a vertex collapses only if its second ring lies on that side
 /// (restrict_to(): all a collapse reads and changes) — a sweep, and a second
 /// when the first made a collapse. So neither half reads what the other
@@ -2671,7 +2680,9 @@ std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& refer
   if (n < kSplitFrom || mesh.number_of_removed_vertices() > 0) return std::nullopt;
   std::vector<Point3d> at(n);
   for (vertex_descriptor v : mesh.vertices()) at[static_cast<std::size_t>(v)] = nearest_point3d(mesh.point(v));
-  const Plane plane = median_plane(at);
+  std::vector<char> moves(n);
+  for (std::size_t v = 0; v < n; ++v) moves[v] = !kept.frozen(at[v]);
+  const Plane plane = median_plane(at, moves);
   if (!parallel) {
     std::size_t made = 0;
     {
