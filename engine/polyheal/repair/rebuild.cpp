@@ -3045,8 +3045,8 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   // it bounds. A component mostly facing into a region of negative winding
   // number (inside out, or a cavity of an inside-out part: the rule of
   // inspect/nesting.h, on a soup) is turned and the field made again. The
-  // facets stay as they are after that: the refinement and
-  // keep_clean_regions() read the same sides.
+  // facets stay as they are after that: keep_clean_regions() reads the
+  // same sides.
   std::optional<WindingNumber> field(std::in_place, f.points, f.tris);
   std::vector<std::array<double, 2>> sides(f.tris.size());
   const auto measure_sides = [&] {
@@ -3234,7 +3234,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
       if (!f.sheet.empty() && f.sheet[t]) return;
       Point3d front, back;
-      faces_out[t] = beside(f, t, 0.05 * g.h, front, back) && sides[t][0] < 0.5 && sides[t][1] > 0.5;
+      faces_out[t] = beside(f, t, 0.02 * g.h, front, back) && winding(front) < 0.5 && winding(back) > 0.5;
     });
     // The facets' open edges (used once): a leaf where a facet ends at one
     // holds the rim of a hole.
