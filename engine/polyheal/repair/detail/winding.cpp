@@ -27,8 +27,11 @@ WindingNumber::WindingNumber(const std::vector<Point3d>& points, const std::vect
   order_.resize(tris.size());
   std::iota(order_.begin(), order_.end(), 0);
   centroid_.resize(tris.size());
-  for (std::size_t t = 0; t < tris.size(); ++t)
+  twice_area_.resize(tris.size());
+  for (std::size_t t = 0; t < tris.size(); ++t) {
     for (int a = 0; a < 3; ++a) centroid_[t][a] = (P(t, 0)[a] + P(t, 1)[a] + P(t, 2)[a]) / 3;
+    twice_area_[t] = normal(P(t, 0), P(t, 1), P(t, 2));
+  }
   if (order_.empty()) return;
   nodes_.resize(1);
   build(0, 0, order_.size());
@@ -106,7 +109,7 @@ void WindingNumber::build(std::size_t slot, std::size_t first, std::size_t last)
   Point3d lo{HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
   for (std::size_t i = first; i < last; ++i) {
     const std::size_t t = order_[i];
-    const Point3d m = normal(P(t, 0), P(t, 1), P(t, 2));
+    const Point3d& m = twice_area_[t];
     const double A = 0.5 * std::sqrt(dot(m, m));
     for (int a = 0; a < 3; ++a) n.normal[a] += 0.5 * m[a];
     area += A;
@@ -119,7 +122,7 @@ void WindingNumber::build(std::size_t slot, std::size_t first, std::size_t last)
   for (int a = 0; a < 3; ++a) n.center[a] = area > 0 ? n.center[a] / area : (lo[a] + hi[a]) / 2;
   for (std::size_t i = first; i < last; ++i) {
     const std::size_t t = order_[i];
-    const Point3d m = normal(P(t, 0), P(t, 1), P(t, 2));  // twice the area vector
+    const Point3d& m = twice_area_[t];
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) n.moment[std::size_t(3 * a + b)] += 0.5 * m[a] * (centroid_[t][b] - n.center[b]);
   }

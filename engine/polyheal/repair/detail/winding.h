@@ -49,6 +49,7 @@ class WindingNumber {
   const std::vector<std::array<Index, 3>>& tris_;
   std::vector<std::size_t> order_;
   std::vector<Point3d> centroid_;
+  std::vector<Point3d> twice_area_;  // each triangle's normal (cross product), twice its area vector
   std::vector<Node> nodes_;
 };
 
