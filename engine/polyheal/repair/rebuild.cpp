@@ -447,6 +447,15 @@ struct OutVertex {
   bool clamped = false;  // moved off the facet, away from a grid corner
 };
 
+/// A surface of output vertices and triangles as a soup.
+Soup surface_soup(const std::vector<OutVertex>& vertices, const std::vector<Tri>& tris) {
+  Soup s;
+  s.points.reserve(vertices.size());
+  for (const OutVertex& v : vertices) s.points.push_back(v.p);
+  for (const Tri& t : tris) s.add_triangle(t[0], t[1], t[2]);
+  return s;
+}
+
 /// Marching tetrahedra over the leaves of the grid's tetrahedral mesh: the
 /// boundary of the inside corners. The mesh is conforming, so the surface is
 /// closed and 2-manifold, each piece lying in its own tetrahedron.
@@ -1328,9 +1337,7 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
       last_give_up = give_up;
       // Exactly: no kept or strip face may intersect anything, nor come
       // within TetGen's shortest edge of it.
-      Soup joined;
-      for (const OutVertex& v : out_vertices) joined.points.push_back(v.p);
-      for (const Tri& t : out_tris) joined.add_triangle(t[0], t[1], t[2]);
+      const Soup joined = surface_soup(out_vertices, out_tris);
       std::vector<FaceName> names(out_tris.size());
       for (std::size_t t = 0; t < out_tris.size(); ++t)
         for (int k = 0; k < 3; ++k) {
@@ -1848,14 +1855,14 @@ std::size_t coarsen_planar(const Facets& f, const std::vector<OutVertex>& vertic
   const Region box = bounds(points);
   const double diagonal = dist(box.lo, box.hi);
   std::vector<char> out_mobility;
-  if (std::size_t(std::count_if(mobility.begin(), mobility.end(), [](char m) { return m != kFixed; })) < kSplitFrom) {
+  std::vector<char> moves(mobility.size());
+  for (std::size_t v = 0; v < mobility.size(); ++v) moves[v] = mobility[v] != kFixed;
+  if (std::size_t(std::count(moves.begin(), moves.end(), 1)) < kSplitFrom) {
     PlanarCoarsening whole(f, vertices, mobility, tris, diagonal);
     const std::size_t made = whole.run();
     whole.result(out_vertices, out_mobility, out_tris);
     return made;
   }
-  std::vector<char> moves(mobility.size());
-  for (std::size_t v = 0; v < mobility.size(); ++v) moves[v] = mobility[v] != kFixed;
   const Plane plane = median_plane(points, moves);
   std::vector<OutVertex> joined_vertices;
   std::vector<char> joined_mobility;
@@ -3401,9 +3408,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   }
   r.extracted_faces = tris.size();
   // The extracted surface, which decimation stays near.
-  Soup extracted;
-  for (const OutVertex& v : vertices) extracted.points.push_back(v.p);
-  for (const Tri& t : tris) extracted.add_triangle(t[0], t[1], t[2]);
+  const Soup extracted = surface_soup(vertices, tris);
   KeptRegions kept;
   if (options.keep_regions) {
     if (obs) obs->stage("keeping clean regions");
@@ -3432,9 +3437,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     // resort, intersects nothing: its pieces lie in their own tetrahedra
     // (so a coarsening that collapsed nothing needs no check, and only pairs
     // with a face it made are searched, where few are new).
-    Soup before;
-    for (const OutVertex& v : vertices) before.points.push_back(v.p);
-    for (const Tri& t : tris) before.add_triangle(t[0], t[1], t[2]);
+    const Soup before = surface_soup(vertices, tris);
     for (int attempt = 0;; ++attempt) {
       std::vector<OutVertex> coarse_vertices;
       std::vector<Tri> coarse_tris;
@@ -3442,9 +3445,7 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
           coarsen_planar(f, vertices, mobility, tris, options.halves_in_parallel, coarse_vertices, coarse_tris);
       std::vector<FacePair> folds;
       if (collapses > 0) {
-        Soup coarse;
-        for (const OutVertex& v : coarse_vertices) coarse.points.push_back(v.p);
-        for (const Tri& t : coarse_tris) coarse.add_triangle(t[0], t[1], t[2]);
+        const Soup coarse = surface_soup(coarse_vertices, coarse_tris);
         std::optional<std::vector<FacePair>> new_pairs = find_self_intersections_from(coarse, before, {});
         folds = new_pairs ? std::move(*new_pairs) : find_self_intersections(coarse);
       }
@@ -3475,9 +3476,8 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
             mobility[v] = kFixed;
     }
   }
+  result.soup = surface_soup(vertices, tris);
   Soup& out = result.soup;
-  for (const OutVertex& v : vertices) out.points.push_back(v.p);
-  for (const Tri& t : tris) out.add_triangle(t[0], t[1], t[2]);
   if (options.decimate && out.face_count() > 0) {
     if (obs) obs->stage("decimating");
     Mesh mesh;
