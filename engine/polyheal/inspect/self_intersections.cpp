@@ -24,6 +24,8 @@ using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::uint32_t, 
 constexpr std::ptrdiff_t kCutoff = 2000;
 // Checks of a few flagged faces: up to this many box tests done directly.
 constexpr std::size_t kDirectPairs = std::size_t(1) << 21;
+// flagged_pairs() splits this many flagged boxes or more, when asked to.
+constexpr std::size_t kSplitFlagged = 1024;
 using Traits = CGAL::Box_intersection_d::Box_traits_d<const Box*>;
 using Tri = detail::Tri<InputKernel>;
 
@@ -166,8 +168,13 @@ void box_pairs(std::vector<const Box*>& boxes, const Callback& callback, int dep
 /// can pair with one; a few flagged boxes (an edit's) are paired by direct
 /// box tests: sorting the whole soup's boxes for them cost more than the tests
 /// (rebuild's clean-region rounds: 38 checks of ~10 faces against 100k).
+/// Many flagged boxes (rebuild's kept regions: thousands of faces) are split
+/// at their median along the widest axis of their union, `depth` levels,
+/// and the halves paired in parallel, each with the boxes meeting its own
+/// union: every pair still comes once (`callback` is called from any thread).
 template <class Callback>
-void flagged_pairs(std::vector<const Box*>& flagged, const std::vector<const Box*>& others, const Callback& callback) {
+void flagged_pairs(std::vector<const Box*>& flagged, const std::vector<const Box*>& others, const Callback& callback,
+                   int depth) {
   if (flagged.empty()) return;
   CGAL::Bbox_3 reach;
   for (const Box* b : flagged) reach += b->bbox();
@@ -178,6 +185,19 @@ void flagged_pairs(std::vector<const Box*>& flagged, const std::vector<const Box
     for (const Box* x : flagged)
       for (const Box* y : near)
         if (CGAL::do_overlap(x->bbox(), y->bbox())) callback(x, y);
+    return;
+  }
+  if (depth > 0 && flagged.size() >= kSplitFlagged) {
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+      if (reach.max(a) - reach.min(a) > reach.max(axis) - reach.min(axis)) axis = a;
+    auto centre = [axis](const Box* b) { return 0.5 * b->min_coord(axis) + 0.5 * b->max_coord(axis); };
+    const auto mid = flagged.begin() + static_cast<std::ptrdiff_t>(flagged.size() / 2);
+    std::nth_element(flagged.begin(), mid, flagged.end(),
+                     [&](const Box* p, const Box* q) { return centre(p) < centre(q); });
+    std::vector<const Box*> lower(flagged.begin(), mid), upper(mid, flagged.end());
+    tbb::parallel_invoke([&] { flagged_pairs(lower, near, callback, depth - 1); },
+                         [&] { flagged_pairs(upper, near, callback, depth - 1); });
     return;
   }
   CGAL::box_intersection_d<CGAL::Sequential_tag>(flagged.begin(), flagged.end(), near.begin(), near.end(), callback,
@@ -209,9 +229,12 @@ void scan(const Soup& s, const SelfIntersectionOptions& o, Found found, const st
     std::vector<const Box*> flagged;
     for (const Box* b : pointers)
       if ((*o.only)[tris[b->info()].face]) flagged.push_back(b);
-    flagged_pairs(flagged, pointers, [&](const Box* x, const Box* y) {
-      if (x != y) callback(x, y);
-    });
+    flagged_pairs(
+        flagged, pointers,
+        [&](const Box* x, const Box* y) {
+          if (x != y) callback(x, y);
+        },
+        o.parallel ? 2 : 0);
     return;
   }
   box_pairs(pointers, callback, o.parallel ? 2 : 0);  // 2 levels: 4 leaves, enough to balance 2 cores
@@ -370,7 +393,7 @@ std::vector<EdgeNearEdge> find_edges_near_edges(const Soup& soup, const std::vec
     std::vector<const Box*> flagged;
     for (const Box* b : pointers)
       if ((*only)[b->info()]) flagged.push_back(b);
-    flagged_pairs(flagged, pointers, near);
+    flagged_pairs(flagged, pointers, near, parallel ? 2 : 0);
   } else {
     // Most meeting boxes are of edges sharing a vertex (always meeting): the
     // broad phase is the cost, so it runs in parallel as scan()'s does.
@@ -397,12 +420,14 @@ std::vector<VertexNearFace> find_vertices_near_faces(const Soup& soup, double to
     point_boxes.push_back(
         box_around(soup.points, {static_cast<Index>(v)}, 0, static_cast<std::uint32_t>(tris.size() + v)));
   DegenerateFlags degenerate(soup, tris);
+  tbb::enumerable_thread_specific<std::vector<VertexNearFace>> local;
   auto near = [&](const Box* f, const Box* p) {
     const FanTriangle& t = tris[f->info()];
     const Index v = static_cast<Index>(p->info() - tris.size());
     if (v == t.v[0] || v == t.v[1] || v == t.v[2] || degenerate(f->info())) return;
     const Point3d* x = soup.points.data();
-    if (point_closer_than_to_triangle(x[v], x[t.v[0]], x[t.v[1]], x[t.v[2]], tol)) out.push_back({v, t.face});
+    if (point_closer_than_to_triangle(x[v], x[t.v[0]], x[t.v[1]], x[t.v[2]], tol))
+      local.local().push_back({v, t.face});
   };
   if (only) {
     // A flagged face against every point, every face against a flagged
@@ -417,13 +442,14 @@ std::vector<VertexNearFace> find_vertices_near_faces(const Soup& soup, double to
       }
     for (const Box* b : points)
       if (corner[b->info() - tris.size()]) flagged_points.push_back(b);
-    flagged_pairs(flagged_faces, points, near);
-    flagged_pairs(flagged_points, faces, [&](const Box* p, const Box* f) { near(f, p); });
+    flagged_pairs(flagged_faces, points, near, 2);
+    flagged_pairs(flagged_points, faces, [&](const Box* p, const Box* f) { near(f, p); }, 2);
   } else {
     CGAL::box_intersection_d(face_boxes.begin(), face_boxes.end(), point_boxes.begin(), point_boxes.end(),
                              [&](const Box& f, const Box& p) { near(&f, &p); },
                              CGAL::Box_intersection_d::Box_traits_d<Box>(), kCutoff);
   }
+  for (const auto& v : local) out.insert(out.end(), v.begin(), v.end());
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end(),
                         [](const VertexNearFace& a, const VertexNearFace& b) {
