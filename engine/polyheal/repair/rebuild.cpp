@@ -714,6 +714,61 @@ struct KeptRegions {
   bool frozen(const Point3d& p) const { return std::binary_search(points.begin(), points.end(), p); }
 };
 
+/// The triangles round each vertex of a triangle surface, in one array: those
+/// of v are around[first[v]] up to around[first[v + 1]], in index order.
+struct Stars {
+  std::vector<std::uint32_t> first, around;
+  Stars(std::size_t vertex_count, const std::vector<Tri>& tris) : first(vertex_count + 1, 0), around(3 * tris.size()) {
+    for (const Tri& t : tris)
+      for (Index v : t) ++first[v + 1];
+    for (std::size_t v = 0; v < vertex_count; ++v) first[v + 1] += first[v];
+    std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
+    for (std::size_t t = 0; t < tris.size(); ++t)
+      for (Index v : tris[t]) around[fill[v]++] = static_cast<std::uint32_t>(t);
+  }
+  /// The triangles round v.
+  auto of(Index v) const { return CGAL::make_range(around.begin() + first[v], around.begin() + first[v + 1]); }
+  /// Whether the triangles round v make one fan, each edge at v used once in
+  /// each direction (true with none). Every triangle with the edge v b has
+  /// v: v's own tell how often each edge at v is used in each direction.
+  struct Scratch {
+    std::vector<Index> next, prev;
+  };
+  bool one_fan(const std::vector<Tri>& tris, Index v, Scratch& s) const {
+    std::vector<Index>&next = s.next, &prev = s.prev;
+    next.clear();
+    prev.clear();
+    for (std::uint32_t i = first[v]; i < first[v + 1]; ++i) {
+      const Tri& t = tris[around[i]];
+      int k = 0;
+      while (t[k] != v) ++k;
+      next.push_back(t[(k + 1) % 3]);
+      prev.push_back(t[(k + 2) % 3]);
+    }
+    if (next.empty()) return true;
+    for (Index b : next)
+      if (std::count(next.begin(), next.end(), b) != 1 || std::count(prev.begin(), prev.end(), b) != 1) return false;
+    // one fan: from a triangle, cross the edge (prev, v) into the one that
+    // has v -> prev, until back
+    std::size_t i = 0, steps = 0;
+    do {
+      i = std::size_t(std::find(next.begin(), next.end(), prev[i]) - next.begin());
+      if (i == next.size()) return false;
+      ++steps;
+    } while (i != 0 && steps <= next.size());
+    return steps == next.size();
+  }
+  /// The triangle with the directed edge a -> b (-1: none), among a's.
+  std::int64_t face_of(const std::vector<Tri>& tris, Index a, Index b) const {
+    for (std::uint32_t i = first[a]; i < first[a + 1]; ++i) {
+      const Tri& t = tris[around[i]];
+      for (int k = 0; k < 3; ++k)
+        if (t[k] == a && t[(k + 1) % 3] == b) return around[i];
+    }
+    return -1;
+  }
+};
+
 /// The simple loops of directed boundary edges (a -> b), each as its vertex
 /// sequence; false when some vertex starts two of them (not simple).
 bool trace_loops(const std::vector<std::array<Index, 2>>& edges, std::vector<std::vector<Index>>& loops) {
@@ -745,11 +800,10 @@ bool trace_loops(const std::vector<std::array<Index, 2>>& edges, std::vector<std
 /// simplex, one of them kept or strip), sorted. Seen on bones and hornbug:
 /// the grid surface of a part thinner than a cell, on the far side of a kept
 /// face, has its vertices on that face's crossings, one of them 1e-17 off
-/// the kept face (tetgen -pQ aborts). `first`/`around`: the faces round each
-/// vertex (offsets by vertex).
+/// the kept face (tetgen -pQ aborts). `stars`: the faces round each vertex.
 std::vector<FacePair> near_pairs_at_seam(const Soup& joined, const std::vector<Tri>& tris,
-                                         const std::vector<std::int64_t>& patch, const std::vector<std::uint32_t>& first,
-                                         const std::vector<std::uint32_t>& around, double tol) {
+                                         const std::vector<std::int64_t>& patch, const Stars& stars, double tol) {
+  const std::vector<std::uint32_t>&first = stars.first, &around = stars.around;
   std::vector<FacePair> out;
   auto add = [&](std::uint32_t s, std::uint32_t t) {
     if (s != t && (patch[s] >= 0 || patch[t] >= 0)) out.push_back({std::min<std::size_t>(s, t), std::max<std::size_t>(s, t)});
@@ -866,10 +920,11 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
     const detail::SurfaceDistance to_bad(bad);
     const double margin = 2 * h;
     std::vector<char> near(T, 0);
-    tbb::parallel_for(std::size_t(0), T, [&](std::size_t t) {
-      if (!ok[t]) return;
-      for (int k = 0; k < 3; ++k)
-        if (to_bad.squared_distance(f.points[f.tris[t][k]]) <= margin * margin) near[t] = 1;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, T), [&](const tbb::blocked_range<std::size_t>& range) {
+      std::size_t hint = bad.size();  // (none yet)
+      for (std::size_t t = range.begin(); t < range.end(); ++t)
+        for (int k = 0; k < 3 && ok[t] && !near[t]; ++k)
+          near[t] = to_bad.any_within(f.points[f.tris[t][k]], margin * margin, hint);
     });
     for (std::size_t t = 0; t < T; ++t)
       if (near[t]) ok[t] = 0;
@@ -882,28 +937,30 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
   Region grid_box;
   for (const OutVertex& v : vertices) grow(grid_box, v.p, grid_box.count++ == 0);
   const double shortest_edge = 2 * InspectOptions().tetgen_epsilon * dist(grid_box.lo, grid_box.hi);
-  // The grid surface: vertex normals, halfedges, points, stars.
+  // The grid surface (a closed 2-manifold): vertex normals, stars, points.
   std::vector<Point3d> vnormal(vertices.size(), Point3d{0, 0, 0});
   for (const Tri& t : tris) {
     const Point3d n = normal(vertices[t[0]].p, vertices[t[1]].p, vertices[t[2]].p);
     for (Index v : t)
       for (int k = 0; k < 3; ++k) vnormal[v][k] += n[k];
   }
-  std::unordered_map<std::uint64_t, std::uint32_t> grid_halfedge;  // a -> b: its grid triangle
-  for (std::size_t t = 0; t < tris.size(); ++t)
-    for (int k = 0; k < 3; ++k) grid_halfedge.emplace(edge_key(tris[t][k], tris[t][(k + 1) % 3]), std::uint32_t(t));
+  const Stars grid_stars(vertices.size(), tris);
   // grid_across[t][k]: the grid triangle across edge k (tris[t][k] -> tris[t][k+1])
   // of t, looked up once (the rounds below ask it for every face, many times).
   std::vector<std::array<std::uint32_t, 3>> grid_across(tris.size());
-  for (std::size_t t = 0; t < tris.size(); ++t)
-    for (int k = 0; k < 3; ++k) grid_across[t][k] = grid_halfedge.at(edge_key(tris[t][(k + 1) % 3], tris[t][k]));
+  tbb::parallel_for(std::size_t(0), tris.size(), [&](std::size_t t) {
+    for (int k = 0; k < 3; ++k)
+      grid_across[t][k] = std::uint32_t(grid_stars.face_of(tris, tris[t][(k + 1) % 3], tris[t][k]));
+  });
+  std::vector<char> grid_fine(vertices.size());  // one fan round each grid vertex (as the rounds ask)
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertices.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+    Stars::Scratch scratch;
+    for (std::size_t v = range.begin(); v < range.end(); ++v) grid_fine[v] = grid_stars.one_fan(tris, Index(v), scratch);
+  });
+  Stars::Scratch scratch;
   std::vector<Point3d> grid_points;
   for (const OutVertex& v : vertices) grid_points.push_back(v.p);
   std::sort(grid_points.begin(), grid_points.end());
-
-  std::vector<std::vector<std::uint32_t>> grid_star(vertices.size());
-  for (std::size_t t = 0; t < tris.size(); ++t)
-    for (Index v : tris[t]) grid_star[v].push_back(static_cast<std::uint32_t>(t));
   // Where a kept facet or a strip intersects something (or comes closer to
   // it than TetGen's shortest edge), the patch shrinks there (the kept
   // facets around the offending corners are let go) and is joined again;
@@ -969,13 +1026,16 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
       kept_corners.push_back({f.points[f.tris[t][0]], f.points[f.tris[t][1]], f.points[f.tris[t][2]]});
     const detail::SurfaceDistance to_kept(kept_corners);
     std::vector<std::int64_t> covered(vertices.size(), -1);
-    tbb::parallel_for(std::size_t(0), vertices.size(), [&](std::size_t v) {
-      const auto [d2, i] = to_kept.nearest(vertices[v].p);
-      if (d2 > 0.25 * h * h) return;  // half a cell
-      const Tri& tr = f.tris[kept_tris[i]];
-      const Point3d n = normal(f.points[tr[0]], f.points[tr[1]], f.points[tr[2]]);
-      if (dot(n, vnormal[v]) > 0.5 * std::sqrt(dot(n, n) * dot(vnormal[v], vnormal[v])))
-        covered[v] = patch[kept_tris[i]];
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertices.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+      std::size_t hint = kept_tris.size();  // (none yet)
+      for (std::size_t v = range.begin(); v < range.end(); ++v) {
+        if (!to_kept.any_within(vertices[v].p, 0.25 * h * h, hint)) continue;  // half a cell (most are far)
+        const std::size_t i = to_kept.nearest(vertices[v].p).second;  // (no hint: ties go as before)
+        const Tri& tr = f.tris[kept_tris[i]];
+        const Point3d n = normal(f.points[tr[0]], f.points[tr[1]], f.points[tr[2]]);
+        if (dot(n, vnormal[v]) > 0.5 * std::sqrt(dot(n, n) * dot(vnormal[v], vnormal[v])))
+          covered[v] = patch[kept_tris[i]];
+      }
     });
     // Each patch's boundary loops (kept facets on the left), once.
     std::vector<std::vector<std::array<Index, 2>>> patch_edges(P);
@@ -1062,8 +1122,8 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
         for (std::size_t v = 0; v < vertices.size(); ++v) {
           if (starts[v] < 2) continue;
           std::int64_t p = -1;
-          for (std::uint32_t t : grid_star[v]) p = std::max(p, removed[t]);
-          for (std::uint32_t t : grid_star[v])
+          for (std::uint32_t t : grid_stars.of(v)) p = std::max(p, removed[t]);
+          for (std::uint32_t t : grid_stars.of(v))
             if (removed[t] < 0) {
               removed[t] = p;
               widened = true;
@@ -1078,7 +1138,7 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
       for (std::size_t t = 0; t < tris.size(); ++t) {
         if (removed[t] < 0) continue;
         for (int k = 0; k < 3; ++k)
-          for (std::uint32_t u : grid_star[tris[t][k]]) {
+          for (std::uint32_t u : grid_stars.of(tris[t][k])) {
             const std::int64_t p = removed[t], q = removed[u];
             if (q >= 0 && q != p) fails[std::size_t(size[std::size_t(p)] < size[std::size_t(q)] ? p : q)] = 1;
           }
@@ -1180,7 +1240,7 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
         for (std::size_t j = 0; j < holes.size() && !fails[p]; ++j) {
           if (taken[j]) continue;
           // the grid faces this unpaired loop bounds, across faces still in
-          std::vector<std::uint32_t> part{grid_halfedge.at(edge_key(holes[j][0], holes[j][1]))};
+          std::vector<std::uint32_t> part{std::uint32_t(grid_stars.face_of(tris, holes[j][0], holes[j][1]))};
           std::unordered_map<std::uint32_t, char> in_part{{part[0], 1}};
           for (std::size_t q = 0; q < part.size() && part.size() <= tris.size() / 4; ++q)
             for (int k = 0; k < 3; ++k) {
@@ -1283,43 +1343,17 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
       // The joined surface must be a closed 2-manifold: every edge once in
       // each direction, every vertex one fan. A patch with a face at a vertex
       // where that fails is given up (and with none there, every patch).
-      // Faces around each vertex, as one array (offsets by vertex).
-      std::vector<std::uint32_t> first(out_vertices.size() + 1, 0), around(3 * out_tris.size());
-      for (const Tri& t : out_tris)
-        for (Index v : t) ++first[v + 1];
-      for (std::size_t v = 0; v < out_vertices.size(); ++v) first[v + 1] += first[v];
+      const Stars stars(out_vertices.size(), out_tris);
+      const std::vector<std::uint32_t>&first = stars.first, &around = stars.around;
       {
-        std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
-        for (std::size_t t = 0; t < out_tris.size(); ++t)
-          for (Index v : out_tris[t]) around[fill[v]++] = static_cast<std::uint32_t>(t);
-      }
-      {
-        // Every face with the edge v b has v: v's own faces tell how often
-        // each edge at v is used in each direction.
-        std::vector<Index> next, prev;
+        // A grid vertex with all its grid faces, and no other, is as it was.
         auto fine = [&](Index v) {
-          next.clear();
-          prev.clear();
-          for (std::uint32_t i = first[v]; i < first[v + 1]; ++i) {
-            const Tri& t = out_tris[around[i]];
-            int k = 0;
-            while (t[k] != v) ++k;
-            next.push_back(t[(k + 1) % 3]);
-            prev.push_back(t[(k + 2) % 3]);
-          }
-          if (next.empty()) return true;
-          for (Index b : next)
-            if (std::count(next.begin(), next.end(), b) != 1 || std::count(prev.begin(), prev.end(), b) != 1)
-              return false;
-          // one fan: from a face, cross the edge (prev, v) into the face that
-          // has v -> prev, until back
-          std::size_t i = 0, steps = 0;
-          do {
-            i = std::size_t(std::find(next.begin(), next.end(), prev[i]) - next.begin());
-            if (i == next.size()) return false;
-            ++steps;
-          } while (i != 0 && steps <= next.size());
-          return steps == next.size();
+          const Index g = grid_of[v];
+          if (g != kNoIndex && first[v + 1] - first[v] == grid_stars.first[g + 1] - grid_stars.first[g] &&
+              std::all_of(around.begin() + first[v], around.begin() + first[v + 1],
+                          [&](std::uint32_t t) { return t < out_grid.size(); }))
+            return grid_fine[g] != 0;
+          return stars.one_fan(out_tris, v, scratch);
         };
         for (Index v = 0; v < out_vertices.size(); ++v) {
           if (fine(v)) continue;
@@ -1393,15 +1427,6 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
         for (const FacePair& q : bad) last_intersecting.push_back({names[q.first], names[q.second]});
         checked_before = true;
         {
-          // The face with the directed edge a -> b (-1: none), among a's.
-          auto face_of = [&](Index a, Index b) -> std::int64_t {
-            for (std::uint32_t i = first[a]; i < first[a + 1]; ++i) {
-              const Tri& t = out_tris[around[i]];
-              for (int k = 0; k < 3; ++k)
-                if (t[k] == a && t[(k + 1) % 3] == b) return around[i];
-            }
-            return -1;
-          };
           auto unit_normal = [&](std::size_t t) {
             const Point3d n = normal(out_vertices[out_tris[t][0]].p, out_vertices[out_tris[t][1]].p,
                                      out_vertices[out_tris[t][2]].p);
@@ -1414,7 +1439,7 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
               continue;  // only strip faces
             const Point3d n = unit_normal(t);
             for (int k = 0; k < 3; ++k) {
-              const std::int64_t o = face_of(out_tris[t][(k + 1) % 3], out_tris[t][k]);
+              const std::int64_t o = stars.face_of(out_tris, out_tris[t][(k + 1) % 3], out_tris[t][k]);
               if (o >= 0 && dot(n, unit_normal(std::size_t(o))) < cos_fold())
                 bad.push_back({std::min(t, std::size_t(o)), std::max(t, std::size_t(o))});
             }
@@ -1425,7 +1450,7 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
           // TetGen's shortest edge to others. Asked of the surface the
           // mending has settled (the zips of earlier rounds come closer
           // than that in many places the widening then takes away anyway).
-          bad = near_pairs_at_seam(joined, out_tris, out_patch, first, around, shortest_edge);
+          bad = near_pairs_at_seam(joined, out_tris, out_patch, stars, shortest_edge);
         }
         // Mended first (the hole widens, by grid faces within two cells of
         // the patch: strips stay short, near the surface), all at once; the
@@ -1456,7 +1481,7 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
           for (std::size_t t : {q.first, q.second})
             for (Index v : out_tris[t]) {
               if (out_source[v] != kNoIndex) continue;
-              for (std::uint32_t u : grid_star[grid_of[v]])
+              for (std::uint32_t u : grid_stars.of(grid_of[v]))
                 if (removed[u] < 0 && island[u] < 0 && near_patch(u)) {
                   island[u] = out_patch[t];
                   evened = true;
