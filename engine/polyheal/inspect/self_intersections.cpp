@@ -162,6 +162,47 @@ void box_pairs(std::vector<const Box*>& boxes, const Callback& callback, int dep
       });
 }
 
+/// The boxes of `boxes` that meet a cell of a grid over `reach` that one of
+/// `flagged` meets (all those that meet a flagged box, and some near them).
+/// Cells about the size of the flagged boxes' spread over `reach`: eight per
+/// flagged box, up to 64 along an axis. A box meeting a flagged one shares a
+/// point with it, and the cell of that point (floor is monotone) is marked.
+std::vector<const Box*> near_flagged_cells(const std::vector<const Box*>& flagged, const CGAL::Bbox_3& reach,
+                                           const std::vector<const Box*>& boxes) {
+  double longest = 0;
+  for (int a = 0; a < 3; ++a) longest = std::max(longest, reach.max(a) - reach.min(a));
+  const double per_axis = std::min(64.0, std::ceil(std::cbrt(8.0 * double(flagged.size()))));
+  if (!(longest > 0) || per_axis < 2) return boxes;
+  const double size = longest / per_axis;
+  int n[3];
+  for (int a = 0; a < 3; ++a) n[a] = std::max(1, std::min(64, int(std::ceil((reach.max(a) - reach.min(a)) / size))));
+  auto cell = [&](double x, int a) { return std::clamp(int(std::floor((x - reach.min(a)) / size)), 0, n[a] - 1); };
+  std::vector<char> marked(std::size_t(n[0]) * std::size_t(n[1]) * std::size_t(n[2]), 0);
+  // Calls visit(index) for each cell box b meets; stops when it returns true.
+  auto cells_of = [&](const Box* b, auto visit) {
+    int lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = cell(b->min_coord(a), a);
+      hi[a] = cell(b->max_coord(a), a);
+    }
+    for (int i = lo[0]; i <= hi[0]; ++i)
+      for (int j = lo[1]; j <= hi[1]; ++j)
+        for (int k = lo[2]; k <= hi[2]; ++k)
+          if (visit((std::size_t(i) * std::size_t(n[1]) + std::size_t(j)) * std::size_t(n[2]) + std::size_t(k)))
+            return true;
+    return false;
+  };
+  for (const Box* b : flagged)
+    cells_of(b, [&](std::size_t c) {
+      marked[c] = 1;
+      return false;
+    });
+  std::vector<const Box*> out;
+  for (const Box* b : boxes)
+    if (cells_of(b, [&](std::size_t c) { return marked[c] != 0; })) out.push_back(b);
+  return out;
+}
+
 /// Every overlapping pair of a `flagged` box with one of `others` through
 /// `callback(flagged, other)` (a box in both is paired with itself; a pair of
 /// two flagged boxes comes twice). Only boxes meeting the flagged ones' union
@@ -181,6 +222,11 @@ void flagged_pairs(std::vector<const Box*>& flagged, const std::vector<const Box
   std::vector<const Box*> near;
   for (const Box* b : others)
     if (CGAL::do_overlap(b->bbox(), reach)) near.push_back(b);
+  // Flagged boxes spread over the soup (rebuild's kept regions, all over a
+  // surface): their union meets most others; only those in cells a flagged
+  // box meets are sorted with them.
+  if (near.size() > 4 * flagged.size() && flagged.size() * near.size() > kDirectPairs)
+    near = near_flagged_cells(flagged, reach, near);
   if (flagged.size() * near.size() <= kDirectPairs) {
     for (const Box* x : flagged)
       for (const Box* y : near)

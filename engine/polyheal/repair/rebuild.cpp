@@ -831,7 +831,7 @@ std::vector<FacePair> near_pairs_at_seam(const Soup& joined, const std::vector<T
         const int n = faces_of(edges.back(), f);
         seam_edge.push_back(std::any_of(f, f + n, [&](std::uint32_t g) { return seam[g] != 0; }));
       }
-  for (const EdgeNearEdge& p : find_edges_near_edges(joined, edges, tol, false, &seam_edge)) {
+  for (const EdgeNearEdge& p : find_edges_near_edges(joined, edges, tol, true, &seam_edge)) {
     std::uint32_t a[2], b[2];
     const int m = faces_of(p.e, a), n = faces_of(p.f, b);
     for (int i = 0; i < m; ++i)
