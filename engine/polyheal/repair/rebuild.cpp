@@ -21,8 +21,10 @@
 #include <mutex>
 #include <numeric>
 #include <optional>
+#include <queue>
 #include <unordered_map>
 #include <unordered_set>
+#include <utility>
 
 #include "polyheal/inspect/local_index.h"
 #include "polyheal/inspect/nesting.h"
@@ -1068,6 +1070,18 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
     // all within a cell of it, no loop of the patch to zip them to): taken
     // out with the patch.
     std::vector<std::int64_t> island(tris.size(), -1);
+    std::vector<std::uint32_t> island_faces;  // those with island >= 0
+    auto set_island = [&](std::uint32_t t, std::int64_t p) {
+      if (island[t] < 0) island_faces.push_back(t);
+      island[t] = p;
+    };
+    // The grid faces at a covered vertex, in index order.
+    std::vector<std::uint32_t> covered_faces;
+    for (std::size_t t = 0; t < tris.size(); ++t)
+      if (covered[tris[t][0]] >= 0 || covered[tris[t][1]] >= 0 || covered[tris[t][2]] >= 0)
+        covered_faces.push_back(std::uint32_t(t));
+    std::vector<char> listed(tris.size(), 0);  // the rounds' marks (all clear between uses)
+    std::vector<int> starts(vertices.size(), 0);  // the neck passes' counts (all zero between passes)
     // The last round's holes and given-up patches: a round that takes out
     // the same grid faces as the last builds the same joined surface, so
     // the mending did nothing there and what is left goes to shrinking now
@@ -1077,9 +1091,13 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
     for (int round = 0; round < 24 && !shrink; ++round) {
       bool islands = false;
       std::vector<char> fails = give_up;
-      // Grid faces taken out, by patch.
+      // Grid faces taken out, by patch. Only faces at a covered vertex or on
+      // an island are taken out first, and only faces next to those after:
+      // the loops below visit those (`taken`, and the faces next to them,
+      // in index order) instead of the whole grid, with the same outcome.
       std::vector<std::int64_t> removed(tris.size(), -1);
-      for (std::size_t t = 0; t < tris.size(); ++t)
+      std::vector<std::uint32_t> taken;
+      for (std::uint32_t t : covered_faces)
         for (Index v : tris[t]) {
           const std::int64_t p = covered[v];
           if (p < 0 || give_up[std::size_t(p)]) continue;
@@ -1088,22 +1106,45 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
           }
           if (removed[t] < 0 || size[std::size_t(p)] > size[std::size_t(removed[t])]) removed[t] = p;
         }
-      for (std::size_t t = 0; t < tris.size(); ++t)
+      for (std::uint32_t t : island_faces)
         if (removed[t] < 0 && island[t] >= 0 && !give_up[std::size_t(island[t])]) removed[t] = island[t];
+      for (const auto* list : {&covered_faces, &island_faces})
+        for (std::uint32_t t : *list)
+          if (removed[t] >= 0 && !std::exchange(listed[t], 1)) taken.push_back(t);
+      // The faces still in with an edge on a hole, in index order.
+      auto next_to_holes = [&] {
+        std::vector<std::uint32_t> out;
+        for (std::uint32_t t : taken)
+          for (std::uint32_t u : grid_across[t])
+            if (removed[u] < 0 && !std::exchange(listed[u], 1)) out.push_back(u);
+        for (std::uint32_t u : out) listed[u] = 0;
+        std::sort(out.begin(), out.end());
+        return out;
+      };
       // Where the hole's boundary passes a grid vertex twice (a neck), the
       // faces around that vertex go too.
       for (int pass = 0; pass < 16; ++pass) {
-        std::vector<int> starts(vertices.size(), 0);
-        for (std::size_t t = 0; t < tris.size(); ++t) {
-          if (removed[t] >= 0) continue;
+        std::vector<Index> starting;  // grid vertices with starts (counted below), in index order
+        for (std::uint32_t t : next_to_holes())
           for (int k = 0; k < 3; ++k)
-            if (removed[grid_across[t][k]] >= 0) ++starts[tris[t][k]];
-        }
+            if (removed[grid_across[t][k]] >= 0 && starts[tris[t][k]]++ == 0) starting.push_back(tris[t][k]);
+        std::sort(starting.begin(), starting.end());
         bool widened = false;
+        auto take = [&](std::uint32_t t, std::int64_t p) {
+          removed[t] = p;
+          listed[t] = 1;
+          taken.push_back(t);
+          widened = true;
+        };
         // A grid face with two edges on the hole juts into it: it would hide
         // parts of the hole's loop from the patch's, and the strip between
-        // them would fold over it.
-        for (std::size_t t = 0; t < tris.size(); ++t) {
+        // them would fold over it. Faces in index order, as they come: one
+        // taken out makes a jut of a later neighbour in the same pass.
+        std::priority_queue<std::uint32_t, std::vector<std::uint32_t>, std::greater<>> juts;
+        for (std::uint32_t t : next_to_holes()) juts.push(t);
+        while (!juts.empty()) {
+          const std::uint32_t t = juts.top();
+          juts.pop();
           if (removed[t] >= 0) continue;
           int open = 0;
           std::int64_t p = -1;
@@ -1115,28 +1156,28 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
             }
           }
           if (open >= 2) {
-            removed[t] = p;
-            widened = true;
+            take(t, p);
+            for (std::uint32_t u : grid_across[t])
+              if (u > t && removed[u] < 0) juts.push(u);
           }
         }
-        for (std::size_t v = 0; v < vertices.size(); ++v) {
-          if (starts[v] < 2) continue;
+        for (Index v : starting) {
+          if (std::exchange(starts[v], 0) < 2) continue;
           std::int64_t p = -1;
           for (std::uint32_t t : grid_stars.of(v)) p = std::max(p, removed[t]);
           for (std::uint32_t t : grid_stars.of(v))
             if (removed[t] < 0) {
-              removed[t] = p;
-              widened = true;
+              take(t, p);
             } else if (removed[t] != p) {
               fails[std::size_t(removed[t])] = fails[std::size_t(p)] = 1;
             }
         }
         if (!widened) break;
       }
+      for (std::uint32_t t : taken) listed[t] = 0;
       // Two patches' holes may not touch (their loops would run into each
       // other): the smaller patch goes.
-      for (std::size_t t = 0; t < tris.size(); ++t) {
-        if (removed[t] < 0) continue;
+      for (std::uint32_t t : taken) {
         for (int k = 0; k < 3; ++k)
           for (std::uint32_t u : grid_stars.of(tris[t][k])) {
             const std::int64_t p = removed[t], q = removed[u];
@@ -1155,8 +1196,7 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
       // The holes' loops (grid faces on the left), by patch.
       std::vector<std::vector<std::array<Index, 2>>> hole_edges(P);
       std::vector<std::array<Index, 2>> all_hole_edges;
-      for (std::size_t t = 0; t < tris.size(); ++t) {
-        if (removed[t] >= 0) continue;
+      for (std::uint32_t t : next_to_holes()) {
         for (int k = 0; k < 3; ++k) {
           const Index a = tris[t][k], b = tris[t][(k + 1) % 3];
           const std::int64_t p = removed[grid_across[t][k]];
@@ -1269,7 +1309,7 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
               }
             break;
           }
-          for (std::uint32_t u : part) island[u] = std::int64_t(p);
+          for (std::uint32_t u : part) set_island(u, std::int64_t(p));
           islands = true;
         }
         if (fails[p] || islands) continue;
@@ -1470,7 +1510,7 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
           const std::size_t grid_face = out_patch[q.first] < 0 ? q.first : q.second;
           const std::size_t other = q.first + q.second - grid_face;
           if (out_patch[grid_face] < 0 && out_patch[other] >= 0 && near_patch(out_grid[grid_face])) {
-            island[out_grid[grid_face]] = out_patch[other];
+            set_island(out_grid[grid_face], out_patch[other]);
             widened = true;
             continue;
           }
@@ -1483,7 +1523,7 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
               if (out_source[v] != kNoIndex) continue;
               for (std::uint32_t u : grid_stars.of(grid_of[v]))
                 if (removed[u] < 0 && island[u] < 0 && near_patch(u)) {
-                  island[u] = out_patch[t];
+                  set_island(u, out_patch[t]);
                   evened = true;
                 }
             }
