@@ -364,6 +364,9 @@ bool static_segments_apart(const Point3d& a, const Point3d& b, const Point3d& c,
   }
   cross3(v, n, u1);
   cross3(w, n, u2);
+  // A point (a corner against a side, as the coarsening and the decimation
+  // ask): the normal to cd towards it separates whenever anything does.
+  if (a == b && separated_along({&a}, {&c, &d}, u2, m, tol)) return true;
   static const double axes[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   for (const double* u : {axes[0], axes[1], axes[2], static_cast<const double*>(n), static_cast<const double*>(u1),
                           static_cast<const double*>(u2), static_cast<const double*>(v), static_cast<const double*>(w)})
