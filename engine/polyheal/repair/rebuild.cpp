@@ -2556,6 +2556,24 @@ class BoundedDecimation {
                           std::max(a[0], b[0]) + grow, std::max(a[1], b[1]) + grow, std::max(a[2], b[2]) + grow);
     };
     const Point3d& x = at(v);
+    // Each vertex and edge of the faces a query finds is asked once (a
+    // vertex comes with every face round it, an edge with both of its):
+    // marked with the query's stamp.
+    std::vector<std::uint32_t>&seen = seen_vertices_, &seen_edges = seen_edges_;
+    seen.resize(mesh_.number_of_vertices() + mesh_.number_of_removed_vertices(), 0);
+    seen_edges.resize(mesh_.number_of_edges() + mesh_.number_of_removed_edges(), 0);
+    auto first_time = [&](std::vector<std::uint32_t>& marks, std::size_t i) {
+      if (marks[i] == stamp_) return false;
+      marks[i] = stamp_;
+      return true;
+    };
+    auto next_query = [&] {
+      if (++stamp_ == 0) {  // wrapped: clear the marks
+        std::fill(seen.begin(), seen.end(), 0);
+        std::fill(seen_edges.begin(), seen_edges.end(), 0);
+        stamp_ = 1;
+      }
+    };
     for (halfedge_descriptor g : CGAL::halfedges_around_target(mesh_.halfedge(v), mesh_)) {
       const vertex_descriptor p = mesh_.source(g), q = mesh_.target(mesh_.next(g));
       if (is_nearly_degenerate(at(p), x, at(q), eps)) return true;
@@ -2566,18 +2584,23 @@ class BoundedDecimation {
       // side, the strip's diagonals left crossing 1e-16 apart)
       const Point3d& y = at(p);
       const double grow = std::max(2 * eps * dist(x, y), shortest);
+      next_query();
       for (face_descriptor f : index_.faces_meeting(box(x, y, grow)))
         for (halfedge_descriptor h : CGAL::halfedges_around_face(mesh_.halfedge(f), mesh_)) {
           const vertex_descriptor a = mesh_.source(h), b = mesh_.target(h);
-          if (a != v && a != p && is_nearly_on_segment(at(a), x, y, eps)) return true;
-          if (a != v && a != p && b != v && b != p && segments_closer_than(x, y, at(a), at(b), shortest)) return true;
+          if (a != v && a != p && first_time(seen, a) && is_nearly_on_segment(at(a), x, y, eps)) return true;
+          if (a != v && a != p && b != v && b != p && first_time(seen_edges, mesh_.edge(h)) &&
+              segments_closer_than(x, y, at(a), at(b), shortest))
+            return true;
         }
       // a vertex within TetGen's shortest edge of the face v p q
       const Point3d& z = at(q);
       const CGAL::Bbox_3 star_face = box(x, y, shortest) + box(z, z, shortest);
+      next_query();
       for (face_descriptor f : index_.faces_meeting(star_face))
         for (vertex_descriptor w : CGAL::vertices_around_face(mesh_.halfedge(f), mesh_))
-          if (w != v && w != p && w != q && point_closer_than_to_triangle(at(w), x, y, z, shortest)) return true;
+          if (w != v && w != p && w != q && first_time(seen, w) && point_closer_than_to_triangle(at(w), x, y, z, shortest))
+            return true;
     }
     // v near an edge xy: within eps |xy| <= eps x the diagonal of it; v
     // within TetGen's shortest edge of a face not round it
@@ -2667,6 +2690,9 @@ class BoundedDecimation {
   std::vector<std::pair<vertex_descriptor, Point3d>> beyond_;
   std::vector<Point3d> ring_;
   std::vector<char> removed_;
+  // sharpening_nears_tolerance()'s: the vertices and edges a query has asked
+  mutable std::vector<std::uint32_t> seen_vertices_, seen_edges_;
+  mutable std::uint32_t stamp_ = 0;
 };
 
 template <class Element>
