@@ -102,12 +102,22 @@ double cos_fold() {
 }
 
 double min_angle_quality(const Point3d& a, const Point3d& b, const Point3d& c) {
+  // 1 - cos of each corner's angle, from the sides e[k] = p[k+1] - p[k]:
+  // at corner k the sides e[k] and -e[k-1] (negation is exact, so each
+  // side's square and each product is computed once, to the same bits as
+  // from the corner's own differences).
   const Point3d* p[3] = {&a, &b, &c};
+  Point3d e[3];
+  double len2[3];
+  for (int k = 0; k < 3; ++k) {
+    const Point3d &o = *p[k], &x = *p[(k + 1) % 3];
+    e[k] = {x[0] - o[0], x[1] - o[1], x[2] - o[2]};
+    len2[k] = dot(e[k], e[k]);
+  }
   double worst = HUGE_VAL;
   for (int k = 0; k < 3; ++k) {
-    const Point3d &o = *p[k], &x = *p[(k + 1) % 3], &y = *p[(k + 2) % 3];
-    const Point3d u{x[0] - o[0], x[1] - o[1], x[2] - o[2]}, w{y[0] - o[0], y[1] - o[1], y[2] - o[2]};
-    worst = std::min(worst, 1 - dot(u, w) / std::sqrt(dot(u, u) * dot(w, w)));
+    const int j = (k + 2) % 3;  // the side into corner k
+    worst = std::min(worst, 1 + dot(e[k], e[j]) / std::sqrt(len2[k] * len2[j]));
   }
   return worst;
 }
