@@ -245,6 +245,45 @@ TEST_CASE("predicates: segment-segment and point-triangle distance tests equal e
   }
 }
 
+TEST_CASE("predicates: corners_clear_of_sides answers only where no corner is that close to its opposite side",
+          "[inspect]") {
+  // Triangles from well shaped to slivers (the third corner lifted 1e-3 to
+  // 1e-17 off the first side's line, some far from the origin), asked at
+  // tolerances round their smallest exact corner-to-side distance: where the
+  // filter answers, that distance must be at least the tolerance (Epeck),
+  // and it must answer for most well shaped triangles at a tolerance well
+  // below it.
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto kp = [](const Point3d& p) { return Kernel::Point_3(p[0], p[1], p[2]); };
+  const double factors[] = {1e-3, 0.5, 1 - 1e-9, 1 - 1e-15, 1, 1 + 1e-15, 1 + 1e-9, 2};
+  int answered = 0, answered_well_shaped = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const double offset = i % 5 == 4 ? 1e6 : 0;
+    Point3d a{u(rng) + offset, u(rng), u(rng)}, b{u(rng) + offset, u(rng), u(rng)}, c{u(rng) + offset, u(rng), u(rng)};
+    const double lift = i % 3 == 0 ? 0.0 : std::pow(10.0, -3.0 - 14.0 * (0.5 + 0.5 * u(rng)));
+    if (i % 3 != 0)  // c near the line ab
+      for (int k = 0; k < 3; ++k) c[k] = a[k] + 0.3 * (b[k] - a[k]) + (k == 1 ? lift : 0);
+    Kernel::FT least = CGAL::squared_distance(kp(a), Kernel::Segment_3(kp(b), kp(c)));
+    least = std::min(least, CGAL::squared_distance(kp(b), Kernel::Segment_3(kp(c), kp(a))));
+    least = std::min(least, CGAL::squared_distance(kp(c), Kernel::Segment_3(kp(a), kp(b))));
+    for (double f : factors) {
+      const double tol = std::sqrt(CGAL::to_double(least)) * f;
+      if (!(tol > 0)) continue;
+      INFO("case " << i << " factor " << f);
+      if (!corners_clear_of_sides(a, b, c, tol)) continue;
+      ++answered;
+      answered_well_shaped += i % 3 == 0 && f == 1e-3;
+      CHECK(!(least < Kernel::FT(tol) * Kernel::FT(tol)));
+      CHECK(!segments_closer_than(a, a, b, c, tol));
+      CHECK(!segments_closer_than(b, b, c, a, tol));
+      CHECK(!segments_closer_than(c, c, a, b, tol));
+    }
+  }
+  CHECK(answered_well_shaped > 900);  // of 1000
+  CHECK(answered > answered_well_shaped);
+}
+
 TEST_CASE("predicates: the enclosed volume's sign does not change when the faces move far away", "[inspect]") {
   // A unit box outward, and the same box with its top face missing (open:
   // the sum is not the same about every point). About the origin the open

@@ -428,6 +428,33 @@ bool point_closer_than_to_triangle(const Point3d& p, const Point3d& a, const Poi
       tol);
 }
 
+bool corners_clear_of_sides(const Point3d& a, const Point3d& b, const Point3d& c, double tol) {
+  // The sides e1 = b - a, e2 = c - a, e3 = c - b are rounded (each
+  // coordinate by a relative eps = 2^-53), and so is every operation of the
+  // cross product n = e1 x e2: each coordinate of n is off by at most about
+  // 8.5 eps m1 m2 (m1, m2 the sides' largest coordinates), |n| by 15 eps m1
+  // m2; 64 eps covers that and the rounding of |n| itself. The longest side
+  // is taken 1e-12 longer than computed (its rounding is ~4 eps).
+  double e1[3], e2[3], e3[3], n[3];
+  for (int k = 0; k < 3; ++k) {
+    e1[k] = b[k] - a[k];
+    e2[k] = c[k] - a[k];
+    e3[k] = c[k] - b[k];
+  }
+  double m1 = 0, m2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    m1 = std::max(m1, std::fabs(e1[k]));
+    m2 = std::max(m2, std::fabs(e2[k]));
+  }
+  if (!(m1 * m2 > 1e-250) || !(m1 * m2 < 1e250) || !(tol > 0) || !(tol < 1e100)) return false;
+  cross3(e1, e2, n);
+  const double twice_area = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  auto len2 = [](const double* e) { return e[0] * e[0] + e[1] * e[1] + e[2] * e[2]; };
+  const double longest = std::sqrt(std::max({len2(e1), len2(e2), len2(e3)})) * (1 + 1e-12);
+  const double eps = std::ldexp(1.0, -53);
+  return twice_area - 64 * eps * m1 * m2 > tol * longest * (1 + 1e-12);
+}
+
 bool segments_closer_than(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& d, double tol) {
   if (static_segments_apart(a, b, c, d, tol)) return false;
   return squared_distance_below(

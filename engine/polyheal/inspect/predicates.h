@@ -60,6 +60,14 @@ bool tetgen_keeps_edge(const Point3d& p, const Point3d& q, const Point3d& r, con
 /// their squared distance < tol^2 on the doubles given).
 bool segments_closer_than(const Point3d& a, const Point3d& b, const Point3d& c, const Point3d& d, double tol);
 
+/// True when every corner of triangle abc is certainly at least `tol` from
+/// the line through the other two (twice its area, computed in doubles with
+/// a bound on the rounding, exceeds `tol` times its longest side), so no
+/// corner is closer than `tol` to the opposite side: segments_closer_than(a,
+/// a, b, c, tol) and the two like it are false. False when that is not
+/// certain (a sliver, or magnitudes near overflow or underflow).
+bool corners_clear_of_sides(const Point3d& a, const Point3d& b, const Point3d& c, double tol);
+
 /// True when point p is strictly closer than `tol` to triangle abc (exactly:
 /// squared distance < tol^2 on the doubles given; a degenerate abc as the
 /// segments it is).

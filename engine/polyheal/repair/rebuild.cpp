@@ -1889,6 +1889,7 @@ class PlanarCoarsening {
   /// sliver 1.5e-8 of its base high (not nearly degenerate in TetGen's
   /// relative sense) but 1.9e-10 from the face beyond its base.
   bool corner_near_side(const Point3d& a, const Point3d& b, const Point3d& c) const {
+    if (corners_clear_of_sides(a, b, c, shortest_edge_)) return false;  // most: no corner near its opposite side
     return segments_closer_than(a, a, b, c, shortest_edge_) || segments_closer_than(b, b, c, a, shortest_edge_) ||
            segments_closer_than(c, c, a, b, shortest_edge_);
   }
