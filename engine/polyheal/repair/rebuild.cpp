@@ -2991,7 +2991,6 @@ std::vector<std::array<Point3d, 3>> far_outside(const Facets& f, const Extracted
   tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
     if (!f.sheet.empty() && f.sheet[t]) return;
     std::size_t hint = SIZE_MAX;
-    auto far_out = [&](const Point3d& p) { return surface.farther(p, h, hint) && surface.winding(p) < 0.5; };
     const Point3d &a = f.points[f.tris[t][0]], &b = f.points[f.tris[t][1]], &c = f.points[f.tris[t][2]];
     const double longest = std::max({dist(a, b), dist(b, c), dist(c, a)});
     const int n = int(std::clamp(std::ceil(longest / h), 1.0, 64.0));
@@ -3008,8 +3007,32 @@ std::vector<std::array<Point3d, 3>> far_outside(const Facets& f, const Extracted
     auto id = [&](int i, int j) { return std::size_t(j * (n + 1) - j * (j - 1) / 2 + i); };
     bool any = false;
     for (int j = 0; j <= n; ++j)
-      for (int i = 0; i + j <= n; ++i) any |= bool(out[id(i, j)] = far_out(at(i, j)));
+      for (int i = 0; i + j <= n; ++i) any |= bool(out[id(i, j)] = surface.farther(at(i, j), h, hint));
     if (!any) return;
+    // Which far samples lie outside: a far sample's neighbours in the
+    // lattice are at most h away (the steps are sides / n <= h), nearer than
+    // the surface is to it, so a far neighbour lies on its side; the winding
+    // number is asked once for each connected set of far samples.
+    std::vector<char> labelled(out.size(), 0);
+    std::vector<std::pair<int, int>> stack;
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i + j <= n; ++i) {
+        if (!out[id(i, j)] || labelled[id(i, j)]) continue;
+        const char outside = surface.winding(at(i, j)) < 0.5;
+        stack.assign(1, {i, j});
+        labelled[id(i, j)] = 1;
+        while (!stack.empty()) {
+          const auto [x, y] = stack.back();
+          stack.pop_back();
+          out[id(x, y)] = outside;
+          for (const auto& [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}, {1, -1}, {-1, 1}}) {
+            const int u = x + dx, w = y + dy;
+            if (u < 0 || w < 0 || u + w > n || !out[id(u, w)] || labelled[id(u, w)]) continue;
+            labelled[id(u, w)] = 1;
+            stack.push_back({u, w});
+          }
+        }
+      }
     for (int j = 0; j < n; ++j)
       for (int i = 0; i + j < n; ++i) {
         if (out[id(i, j)] || out[id(i + 1, j)] || out[id(i, j + 1)])
