@@ -965,9 +965,11 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
       grid_across[t][k] = std::uint32_t(grid_stars.face_of(tris, tris[t][(k + 1) % 3], tris[t][k]));
   });
   std::vector<char> grid_fine(vertices.size());  // one fan round each grid vertex (as the rounds ask)
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertices.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+  using Range = tbb::blocked_range<std::size_t>;
+  tbb::parallel_for(Range(0, vertices.size()), [&](const Range& range) {
     Stars::Scratch scratch;
-    for (std::size_t v = range.begin(); v < range.end(); ++v) grid_fine[v] = grid_stars.one_fan(tris, Index(v), scratch);
+    for (std::size_t v = range.begin(); v < range.end(); ++v)
+      grid_fine[v] = grid_stars.one_fan(tris, Index(v), scratch);
   });
   Stars::Scratch scratch;
   std::vector<Point3d> grid_points;
@@ -1038,7 +1040,7 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
       kept_corners.push_back({f.points[f.tris[t][0]], f.points[f.tris[t][1]], f.points[f.tris[t][2]]});
     const detail::SurfaceDistance to_kept(kept_corners);
     std::vector<std::int64_t> covered(vertices.size(), -1);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertices.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+    tbb::parallel_for(Range(0, vertices.size()), [&](const Range& range) {
       std::size_t hint = kept_tris.size();  // (none yet)
       for (std::size_t v = range.begin(); v < range.end(); ++v) {
         if (!to_kept.any_within(vertices[v].p, 0.25 * h * h, hint)) continue;  // half a cell (most are far)
@@ -1103,8 +1105,13 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
       std::vector<char> fails = give_up;
       // Grid faces taken out, by patch. Only faces at a covered vertex or on
       // an island are taken out first, and only faces next to those after:
-      // the loops below visit those (`taken`, and the faces next to them,
-      // in index order) instead of the whole grid, with the same outcome.
+      // the loops below visit the taken faces on the rim (those with an edge
+      // to a face not taken by the same patch, or a corner where the grid is
+      // not one fan) and the faces next to them, in index order, instead of
+      // the whole grid, with the same outcome. A face off the rim stays off
+      // it (taken faces stay as they are), and wherever two patches' faces
+      // meet at a vertex, each has a face on the rim there (round one fan
+      // the patch changes across an edge).
       std::vector<std::int64_t> removed(tris.size(), -1);
       std::vector<std::uint32_t> taken;
       for (std::uint32_t t : covered_faces)
@@ -1121,10 +1128,16 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
       for (const auto* list : {&covered_faces, &island_faces})
         for (std::uint32_t t : *list)
           if (removed[t] >= 0 && !std::exchange(listed[t], 1)) taken.push_back(t);
+      std::vector<std::uint32_t> rim;
+      for (std::uint32_t t : taken)
+        if (std::any_of(grid_across[t].begin(), grid_across[t].end(),
+                        [&](std::uint32_t u) { return removed[u] != removed[t]; }) ||
+            !grid_fine[tris[t][0]] || !grid_fine[tris[t][1]] || !grid_fine[tris[t][2]])
+          rim.push_back(t);
       // The faces still in with an edge on a hole, in index order.
       auto next_to_holes = [&] {
         std::vector<std::uint32_t> out;
-        for (std::uint32_t t : taken)
+        for (std::uint32_t t : rim)
           for (std::uint32_t u : grid_across[t])
             if (removed[u] < 0 && !std::exchange(listed[u], 1)) out.push_back(u);
         for (std::uint32_t u : out) listed[u] = 0;
@@ -1144,6 +1157,7 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
           removed[t] = p;
           listed[t] = 1;
           taken.push_back(t);
+          rim.push_back(t);
           widened = true;
         };
         // A grid face with two edges on the hole juts into it: it would hide
@@ -1187,7 +1201,7 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
       for (std::uint32_t t : taken) listed[t] = 0;
       // Two patches' holes may not touch (their loops would run into each
       // other): the smaller patch goes.
-      for (std::uint32_t t : taken) {
+      for (std::uint32_t t : rim) {
         for (int k = 0; k < 3; ++k)
           for (std::uint32_t u : grid_stars.of(tris[t][k])) {
             const std::int64_t p = removed[t], q = removed[u];
@@ -2610,7 +2624,8 @@ class BoundedDecimation {
       next_query();
       for (face_descriptor f : index_.faces_meeting(star_face))
         for (vertex_descriptor w : CGAL::vertices_around_face(mesh_.halfedge(f), mesh_))
-          if (w != v && w != p && w != q && first_time(seen, w) && point_closer_than_to_triangle(at(w), x, y, z, shortest))
+          if (w != v && w != p && w != q && first_time(seen, w) &&
+              point_closer_than_to_triangle(at(w), x, y, z, shortest))
             return true;
     }
     // v near an edge xy: within eps |xy| <= eps x the diagonal of it; v
