@@ -770,6 +770,16 @@ struct Stars {
     } while (i != 0 && steps <= next.size());
     return steps == next.size();
   }
+  /// The triangles with the edge a b in either direction (up to two, into
+  /// `of`), among a's; how many.
+  int faces_of_edge(const std::vector<Tri>& tris, Index a, Index b, std::uint32_t of[2]) const {
+    int n = 0;
+    for (std::uint32_t i = first[a]; i < first[a + 1] && n < 2; ++i) {
+      const Tri& t = tris[around[i]];
+      if (t[0] == b || t[1] == b || t[2] == b) of[n++] = around[i];
+    }
+    return n;
+  }
   /// The triangle with the directed edge a -> b (-1: none), among a's.
   std::int64_t face_of(const std::vector<Tri>& tris, Index a, Index b) const {
     for (std::uint32_t i = first[a]; i < first[a + 1]; ++i) {
@@ -815,7 +825,6 @@ bool trace_loops(const std::vector<std::array<Index, 2>>& edges, std::vector<std
 /// the kept face (tetgen -pQ aborts). `stars`: the faces round each vertex.
 std::vector<FacePair> near_pairs_at_seam(const Soup& joined, const std::vector<Tri>& tris,
                                          const std::vector<std::int64_t>& patch, const Stars& stars, double tol) {
-  const std::vector<std::uint32_t>&first = stars.first, &around = stars.around;
   std::vector<FacePair> out;
   auto add = [&](std::uint32_t s, std::uint32_t t) {
     if (s != t && (patch[s] >= 0 || patch[t] >= 0)) out.push_back({std::min<std::size_t>(s, t), std::max<std::size_t>(s, t)});
@@ -823,15 +832,10 @@ std::vector<FacePair> near_pairs_at_seam(const Soup& joined, const std::vector<T
   std::vector<char> seam(tris.size(), 0);
   for (std::size_t t = 0; t < tris.size(); ++t) seam[t] = patch[t] >= 0;
   for (const VertexNearFace& p : find_vertices_near_faces(joined, tol, &seam))
-    for (std::uint32_t i = first[p.vertex]; i < first[p.vertex + 1]; ++i) add(around[i], std::uint32_t(p.face));
+    for (std::uint32_t t : stars.of(p.vertex)) add(t, std::uint32_t(p.face));
   // The faces of edge e (closed and oriented: two).
   auto faces_of = [&](const std::array<Index, 2>& e, std::uint32_t of[2]) {
-    int n = 0;
-    for (std::uint32_t i = first[e[0]]; i < first[e[0] + 1] && n < 2; ++i) {
-      const Tri& t = tris[around[i]];
-      if (t[0] == e[1] || t[1] == e[1] || t[2] == e[1]) of[n++] = around[i];
-    }
-    return n;
+    return stars.faces_of_edge(tris, e[0], e[1], of);
   };
   std::vector<std::array<Index, 2>> edges;
   std::vector<char> seam_edge;
@@ -1113,7 +1117,7 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
       // meet at a vertex, each has a face on the rim there (round one fan
       // the patch changes across an edge).
       std::vector<std::int64_t> removed(tris.size(), -1);
-      std::vector<std::uint32_t> taken;
+      std::vector<std::uint32_t> taken_first;  // at covered vertices or on islands
       for (std::uint32_t t : covered_faces)
         for (Index v : tris[t]) {
           const std::int64_t p = covered[v];
@@ -1127,13 +1131,15 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
         if (removed[t] < 0 && island[t] >= 0 && !give_up[std::size_t(island[t])]) removed[t] = island[t];
       for (const auto* list : {&covered_faces, &island_faces})
         for (std::uint32_t t : *list)
-          if (removed[t] >= 0 && !std::exchange(listed[t], 1)) taken.push_back(t);
+          if (removed[t] >= 0 && !std::exchange(listed[t], 1)) taken_first.push_back(t);
       std::vector<std::uint32_t> rim;
-      for (std::uint32_t t : taken)
+      for (std::uint32_t t : taken_first) {
+        listed[t] = 0;
         if (std::any_of(grid_across[t].begin(), grid_across[t].end(),
                         [&](std::uint32_t u) { return removed[u] != removed[t]; }) ||
             !grid_fine[tris[t][0]] || !grid_fine[tris[t][1]] || !grid_fine[tris[t][2]])
           rim.push_back(t);
+      }
       // The faces still in with an edge on a hole, in index order.
       auto next_to_holes = [&] {
         std::vector<std::uint32_t> out;
@@ -1155,8 +1161,6 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
         bool widened = false;
         auto take = [&](std::uint32_t t, std::int64_t p) {
           removed[t] = p;
-          listed[t] = 1;
-          taken.push_back(t);
           rim.push_back(t);
           widened = true;
         };
@@ -1198,7 +1202,6 @@ KeptRegions keep_clean_regions(const Facets& f, const std::vector<std::array<dou
         }
         if (!widened) break;
       }
-      for (std::uint32_t t : taken) listed[t] = 0;
       // Two patches' holes may not touch (their loops would run into each
       // other): the smaller patch goes.
       for (std::uint32_t t : rim) {
