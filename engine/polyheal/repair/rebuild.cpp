@@ -495,9 +495,11 @@ class Extractor {
       tetrahedron(id, in);
     }
     vertices.resize(first + edges_.size());
-    tbb::parallel_for(std::size_t(0), edges_.size(), [&](std::size_t i) { vertices[first + i] = vertex(edges_[i]); });
+    tbb::parallel_for(std::size_t(0), edges_.size(),
+                      [&](std::size_t i) { vertices[first + i] = vertex(edges_[i]); });
     r_.crossed_edges += edges_.size();
-    for (std::size_t i = first; i < vertices.size(); ++i) ++(vertices[i].facet < 0 ? r_.interpolated : r_.facet_crossings);
+    for (std::size_t i = first; i < vertices.size(); ++i)
+      ++(vertices[i].facet < 0 ? r_.interpolated : r_.facet_crossings);
     for (const Piece& piece : pieces_) {
       Index q[4];
       for (int k = 0; k < 4; ++k) q[k] = static_cast<Index>(first + piece.q[k]);
@@ -2240,14 +2242,17 @@ class BoundedDecimation {
   /// neighbour (normals more than 179 degrees apart) and intersect nothing
   /// (the oracle's local query). Cube-marching chamfers become edges.
   /// `input`: the facets of `f`. The edge or corner must be one of the
-  /// input's: the target lies on it.
-  std::size_t sharpen(const Facets& f, const detail::SurfaceDistance& input, double reach, double cos_feature) {
+  /// input's: the target lies on it. `only`: the vertices to try (a flag
+  /// per vertex; all when none is given: sharpen_in_halves()).
+  std::size_t sharpen(const Facets& f, const detail::SurfaceDistance& input, double reach, double cos_feature,
+                      const std::vector<char>* only = nullptr) {
     const double on_input = 0.05 * reach;
     const double cos_same = std::cos(10 * M_PI / 180);
     const std::vector<Point3d> unit = unit_normals(f);
     std::size_t moved = 0;
     std::vector<vertex_descriptor> all(mesh_.vertices().begin(), mesh_.vertices().end());
     for (vertex_descriptor v : all) {
+      if (only && !(*only)[static_cast<std::size_t>(v)]) continue;
       if (kept_.frozen(at(v))) continue;
       std::vector<std::int64_t> planes;
       auto consider = [&](vertex_descriptor u) {
@@ -2316,10 +2321,25 @@ class BoundedDecimation {
       }
       data_.moved[v] = 1;  // off the extracted surface now
       index_.update(star);
+      sharpened_.push_back(v);
       data_.facet[v] = -1;  // on two planes now: it votes for no face group
       ++moved;
     }
     return moved;
+  }
+
+  /// The vertices sharpen() moved.
+  const std::vector<vertex_descriptor>& sharpened() const { return sharpened_; }
+  /// Vertices another instance moved on the same mesh (sharpen_in_halves()):
+  /// their places and their faces' boxes taken up.
+  void moved_elsewhere(const std::vector<vertex_descriptor>& moved) {
+    std::vector<face_descriptor> star;
+    for (vertex_descriptor v : moved) {
+      at_[static_cast<std::size_t>(v)] = nearest_point3d(mesh_.point(v));
+      for (face_descriptor g : CGAL::faces_around_target(mesh_.halfedge(v), mesh_))
+        if (g != Mesh::null_face()) star.push_back(g);
+    }
+    index_.update(star);
   }
 
   /// Every vertex, in order, tries to collapse into a neighbour within
@@ -2750,6 +2770,7 @@ class BoundedDecimation {
   std::optional<Side> side_;
   DecimationData data_;  // moved: sharpened, so no longer on the extracted surface
   std::vector<Point3d> at_;
+  std::vector<vertex_descriptor> sharpened_;  // by sharpen()
   // try_collapse's scratch buffers
   std::vector<vertex_descriptor> guarded_, outer_;  // guarded()'s vertices, the fan's outer ones
   std::vector<Region> triangle_boxes_, edge_boxes_;  // leaves_near_pairs()'s
@@ -2878,7 +2899,8 @@ std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& refer
         here = here || (at[static_cast<std::size_t>(v)][plane.axis] < plane.at) == (s == 0);
       if (!here) continue;
       faces[s].emplace_back(0, f);
-      for (vertex_descriptor v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) used[static_cast<std::size_t>(v)] = 1;
+      for (vertex_descriptor v : CGAL::vertices_around_face(mesh.halfedge(f), mesh))
+        used[static_cast<std::size_t>(v)] = 1;
     }
     for (vertex_descriptor v : mesh.vertices())
       if (used[static_cast<std::size_t>(v)]) vertices[s].emplace_back(0, v);
@@ -2917,6 +2939,81 @@ std::optional<std::size_t> sweep_in_halves(Mesh& mesh, const TriangleGrid& refer
   if (!joined) return std::nullopt;
   mesh = std::move(*joined);
   return made[0] + made[1] > 0 ? made[0] + made[1] + seam(plane) : std::size_t(0);
+}
+
+/// BoundedDecimation::sharpen() on the two halves of the surface at once
+/// (as sweep_in_halves() decimates), then on the seam. A vertex is in a
+/// half when its second ring lies farther than `reach` plus twice the
+/// sharpening guards' reach (TetGen's tolerance times `diagonal`, twice)
+/// from the plane on that side: it moves by at most `reach`, and then
+/// every face it reads — its ring's, the faces beyond, the faces the index
+/// finds near its new star — has a corner on its side, is indexed in its
+/// half's instance and is changed by no vertex of the other half, whose
+/// faces lie wholly across (no face round a vertex of either half crosses
+/// the plane). So the halves may run in either order, or at once, on the
+/// one mesh, each with its own index; the seam's vertices after, with an
+/// index of the result. `parallel` false (for tests): the halves and the
+/// seam one after the other with one index — the same result. Returns the
+/// vertices moved.
+std::size_t sharpen_in_halves(Mesh& mesh, const TriangleGrid& reference, double tolerance, double diagonal,
+                              const KeptRegions& kept, const Facets& f, const detail::SurfaceDistance& input,
+                              double reach, double cos_feature, bool parallel) {
+  constexpr std::size_t kSplitFrom = 4096;  // vertices: below, sharpening costs little
+  const std::size_t n = mesh.number_of_vertices() + mesh.number_of_removed_vertices();
+  if (mesh.number_of_vertices() < kSplitFrom)
+    return BoundedDecimation(mesh, reference, tolerance, diagonal, kept).sharpen(f, input, reach, cos_feature);
+  // The plane halves the vertices that get past sharpen()'s first test
+  // (facets round them meeting at more than the feature angle), where its
+  // time goes.
+  const std::vector<Point3d> unit = unit_normals(f);
+  const DecimationData data(mesh);
+  std::vector<Point3d> at(n);
+  std::vector<char> moves(n, 0);
+  for (vertex_descriptor v : mesh.vertices()) {
+    at[static_cast<std::size_t>(v)] = nearest_point3d(mesh.point(v));
+    if (kept.frozen(at[static_cast<std::size_t>(v)])) continue;
+    std::int64_t a = data.facet[v];
+    for (vertex_descriptor u : CGAL::vertices_around_target(mesh.halfedge(v), mesh)) {
+      const std::int64_t b = data.facet[u];
+      if (a < 0) a = b;
+      else if (b >= 0 && dot(unit[std::size_t(a)], unit[std::size_t(b)]) < cos_feature)
+        moves[static_cast<std::size_t>(v)] = 1;
+    }
+  }
+  const Plane plane = median_plane(at, moves);
+  const double margin = reach + 4 * InspectOptions().tetgen_epsilon * diagonal;
+  std::vector<char> part[3] = {std::vector<char>(n, 0), std::vector<char>(n, 0), std::vector<char>(n, 0)};
+  for (vertex_descriptor v : mesh.vertices()) {
+    double lo = HUGE_VAL, hi = -HUGE_VAL;
+    auto see = [&](vertex_descriptor w) {
+      lo = std::min(lo, at[static_cast<std::size_t>(w)][plane.axis]);
+      hi = std::max(hi, at[static_cast<std::size_t>(w)][plane.axis]);
+    };
+    see(v);
+    for (vertex_descriptor x : CGAL::vertices_around_target(mesh.halfedge(v), mesh)) {
+      see(x);
+      for (vertex_descriptor w : CGAL::vertices_around_target(mesh.halfedge(x), mesh)) see(w);
+    }
+    part[hi < plane.at - margin ? 0 : lo > plane.at + margin ? 1 : 2][static_cast<std::size_t>(v)] = 1;
+  }
+  if (!parallel) {
+    BoundedDecimation whole(mesh, reference, tolerance, diagonal, kept);
+    std::size_t moved = 0;
+    for (const std::vector<char>& only : part) moved += whole.sharpen(f, input, reach, cos_feature, &only);
+    return moved;
+  }
+  // The halves' instances are made at once too, before either moves a
+  // vertex (they only read the mesh, and its property maps, which exist:
+  // DecimationData above); the first then learns what the second moved and
+  // does the seam.
+  std::optional<BoundedDecimation> half[2];
+  std::size_t moved[2] = {0, 0};
+  tbb::parallel_invoke([&] { half[0].emplace(mesh, reference, tolerance, diagonal, kept); },
+                       [&] { half[1].emplace(mesh, reference, tolerance, diagonal, kept); });
+  tbb::parallel_invoke([&] { moved[0] = half[0]->sharpen(f, input, reach, cos_feature, &part[0]); },
+                       [&] { moved[1] = half[1]->sharpen(f, input, reach, cos_feature, &part[1]); });
+  half[0]->moved_elsewhere(half[1]->sharpened());
+  return moved[0] + moved[1] + half[0]->sharpen(f, input, reach, cos_feature, &part[2]);
 }
 
 /// The bounded decimation: sweeps at a quarter, half and all of the
@@ -3673,9 +3770,8 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
     const Region points = bounds(out.points);
     const double diagonal = dist(points.lo, points.hi);
     if (options.sharpen) {
-      BoundedDecimation sharpening(mesh, reference, tolerance, diagonal, kept);
-      r.sharpened =
-          sharpening.sharpen(f, input_surface, 0.75 * r.cell, std::cos(options.feature_angle * M_PI / 180));
+      r.sharpened = sharpen_in_halves(mesh, reference, tolerance, diagonal, kept, f, input_surface, 0.75 * r.cell,
+                                      std::cos(options.feature_angle * M_PI / 180), options.halves_in_parallel);
     }
     r.decimated = decimate(mesh, reference, tolerance, diagonal, kept, options.halves_in_parallel);
     facet = DecimationData(mesh).facet;  // decimate() built the mesh anew
