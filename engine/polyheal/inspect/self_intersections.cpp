@@ -114,8 +114,31 @@ class DegenerateFlags {
 /// are disjoint in space, so the work does not grow with the split.
 template <class Callback>
 void box_pairs(std::vector<const Box*>& boxes, const Callback& callback, int depth) {
+  // Where no split is made (fewer than 20000 boxes, or too many straddling),
+  // the pairs are tested in parallel all the same when `depth` asks for
+  // threads: the sequential scan finds them in batches, and each batch's
+  // tests are shared out (a small surface of costly pairs — the large
+  // coplanar fans of a coarsened one — is all narrow phase).
   auto sequential_self = [&](std::vector<const Box*>& v) {
-    CGAL::box_self_intersection_d<CGAL::Sequential_tag>(v.begin(), v.end(), callback, Traits(), kCutoff);
+    if (depth == 0) {
+      CGAL::box_self_intersection_d<CGAL::Sequential_tag>(v.begin(), v.end(), callback, Traits(), kCutoff);
+      return;
+    }
+    constexpr std::size_t kBatch = std::size_t(1) << 16;
+    std::vector<std::pair<const Box*, const Box*>> batch;
+    auto test = [&] {
+      tbb::parallel_for(std::size_t(0), batch.size(),
+                        [&](std::size_t i) { callback(batch[i].first, batch[i].second); });
+      batch.clear();
+    };
+    CGAL::box_self_intersection_d<CGAL::Sequential_tag>(
+        v.begin(), v.end(),
+        [&](const Box* x, const Box* y) {
+          batch.emplace_back(x, y);
+          if (batch.size() == kBatch) test();
+        },
+        Traits(), kCutoff);
+    test();
   };
   if (depth == 0 || boxes.size() < 20000) return sequential_self(boxes);
   double lo[3], hi[3];
