@@ -1,5 +1,7 @@
 #include "polyheal/repair/detail/winding.h"
 
+#include <boost/container/small_vector.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -35,6 +37,15 @@ WindingNumber::WindingNumber(const std::vector<Point3d>& points, const std::vect
   if (order_.empty()) return;
   nodes_.resize(1);
   build(0, 0, order_.size());
+  // The leaves' triangles, in the order the nodes hold them, side by side
+  // (what evaluate() reads most, without an index and a point lookup per
+  // corner); what only build() needed goes.
+  corners_.resize(order_.size());
+  for (std::size_t i = 0; i < order_.size(); ++i)
+    for (int k = 0; k < 3; ++k) corners_[i][std::size_t(k)] = P(order_[i], k);
+  std::vector<std::size_t>().swap(order_);
+  std::vector<Point3d>().swap(centroid_);
+  std::vector<Point3d>().swap(twice_area_);
 }
 
 double WindingNumber::operator()(const Point3d& q) const {
@@ -51,7 +62,8 @@ double WindingNumber::share(std::size_t t, const Point3d& q) const { return soli
 double WindingNumber::evaluate(const Point3d& q, double beta) const {
   if (nodes_.empty()) return 0;
   double sum = 0;
-  std::vector<std::size_t> stack{0};
+  boost::container::small_vector<std::size_t, 64> stack;  // (depth-first: at most the tree's depth + 1)
+  stack.push_back(0);
   while (!stack.empty()) {
     const Node& n = nodes_[stack.back()];
     stack.pop_back();
@@ -72,7 +84,7 @@ double WindingNumber::evaluate(const Point3d& q, double beta) const {
       sum += (n.normal[0] * d[0] + n.normal[1] * d[1] + n.normal[2] * d[2] + m[0] + m[4] + m[8]) / r3 -
              3 * rmr / (r3 * r2);
     } else if (n.left < 0) {
-      for (std::size_t i = n.first; i < n.last; ++i) sum += solid_angle(order_[i], q);
+      for (std::size_t i = n.first; i < n.last; ++i) sum += solid_angle(corners_[i], q);
     } else {
       stack.push_back(std::size_t(n.left));
       stack.push_back(std::size_t(n.left) + 1);
@@ -82,11 +94,15 @@ double WindingNumber::evaluate(const Point3d& q, double beta) const {
 }
 
 double WindingNumber::solid_angle(std::size_t t, const Point3d& q) const {
+  return solid_angle({P(t, 0), P(t, 1), P(t, 2)}, q);
+}
+
+double WindingNumber::solid_angle(const std::array<Point3d, 3>& p, const Point3d& q) {
   double a[3], b[3], c[3];
   for (int i = 0; i < 3; ++i) {
-    a[i] = P(t, 0)[i] - q[i];
-    b[i] = P(t, 1)[i] - q[i];
-    c[i] = P(t, 2)[i] - q[i];
+    a[i] = p[0][i] - q[i];
+    b[i] = p[1][i] - q[i];
+    c[i] = p[2][i] - q[i];
   }
   const double la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
   const double lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);

@@ -42,15 +42,19 @@ class WindingNumber {
   };
   double evaluate(const Point3d& q, double beta) const;
   double solid_angle(std::size_t t, const Point3d& q) const;
+  static double solid_angle(const std::array<Point3d, 3>& corners, const Point3d& q);
   void build(std::size_t slot, std::size_t first, std::size_t last);
   const Point3d& P(std::size_t t, int k) const { return points_[tris_[t][k]]; }
 
   const std::vector<Point3d>& points_;
   const std::vector<std::array<Index, 3>>& tris_;
+  // build()'s, released after it: the triangles in the nodes' order, their
+  // centroids and normals (cross products, twice their area vectors)
   std::vector<std::size_t> order_;
   std::vector<Point3d> centroid_;
-  std::vector<Point3d> twice_area_;  // each triangle's normal (cross product), twice its area vector
+  std::vector<Point3d> twice_area_;
   std::vector<Node> nodes_;
+  std::vector<std::array<Point3d, 3>> corners_;  // the triangles' corners, in the nodes' order
 };
 
 }  // namespace polyheal::detail
