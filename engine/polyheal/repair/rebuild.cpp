@@ -3109,10 +3109,16 @@ class ExtractedSurface {
   }
   /// Asked only of points farther() finds away from the surface: where
   /// there are none (most surfaces), its hierarchy is never built (a
-  /// serial build over every extracted face, 5% of quads_to_stitch's work).
+  /// build over every extracted face: once 5% of quads_to_stitch's work).
   double winding(const Point3d& p) const {
-    std::call_once(winding_made_, [&] { winding_.emplace(facets_.points, facets_.tris); });
+    make_winding();
     return (*winding_)(p);
+  }
+  /// Builds the hierarchy winding() asks (once; in parallel): called before
+  /// a parallel loop that will ask it, so that no thread waits for another
+  /// to build it alone.
+  void make_winding() const {
+    std::call_once(winding_made_, [&] { winding_.emplace(facets_.points, facets_.tris); });
   }
 
  private:
@@ -3141,28 +3147,46 @@ class ExtractedSurface {
 /// cut into sub-triangles about `h` across (at most 64 to an edge), and
 /// those with a corner that far out are returned.
 std::vector<std::array<Point3d, 3>> far_outside(const Facets& f, const ExtractedSurface& surface, double h) {
-  std::vector<std::vector<std::array<Point3d, 3>>> pieces(f.tris.size());
-  tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
-    if (!f.sheet.empty() && f.sheet[t]) return;
-    std::size_t hint = SIZE_MAX;
-    const Point3d &a = f.points[f.tris[t][0]], &b = f.points[f.tris[t][1]], &c = f.points[f.tris[t][2]];
-    const double longest = std::max({dist(a, b), dist(b, c), dist(c, a)});
-    const int n = int(std::clamp(std::ceil(longest / h), 1.0, 64.0));
+  // Each facet's lattice of samples; first which are far from the surface,
+  // then (the winding hierarchy built, if any is) which of those lie outside.
+  struct Lattice {
+    const Point3d &a, &b, &c;
+    int n;
+    Lattice(const Facets& f, std::size_t t, double h)
+        : a(f.points[f.tris[t][0]]), b(f.points[f.tris[t][1]]), c(f.points[f.tris[t][2]]),
+          n(int(std::clamp(std::ceil(std::max({dist(a, b), dist(b, c), dist(c, a)}) / h), 1.0, 64.0))) {}
     // The sample (i, j) is a + i/n (b - a) + j/n (c - a), i + j <= n.
-    auto at = [&](int i, int j) {
+    Point3d at(int i, int j) const {
       Point3d p;
       for (int k = 0; k < 3; ++k) p[k] = a[k] + (double(i) / n) * (b[k] - a[k]) + (double(j) / n) * (c[k] - a[k]);
       if (i == n) p = b;
       if (j == n) p = c;
       if (i == 0 && j == 0) p = a;
       return p;
-    };
-    std::vector<char> out(std::size_t((n + 1) * (n + 2) / 2));
-    auto id = [&](int i, int j) { return std::size_t(j * (n + 1) - j * (j - 1) / 2 + i); };
+    }
+    std::size_t id(int i, int j) const { return std::size_t(j * (n + 1) - j * (j - 1) / 2 + i); }
+  };
+  std::vector<std::vector<char>> far(f.tris.size());  // per facet, by sample (none: no sample far)
+  tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
+    if (!f.sheet.empty() && f.sheet[t]) return;
+    std::size_t hint = SIZE_MAX;
+    const Lattice l(f, t, h);
+    std::vector<char> out(std::size_t((l.n + 1) * (l.n + 2) / 2));
     bool any = false;
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i + j <= n; ++i) any |= bool(out[id(i, j)] = surface.farther(at(i, j), h, hint));
-    if (!any) return;
+    for (int j = 0; j <= l.n; ++j)
+      for (int i = 0; i + j <= l.n; ++i) any |= bool(out[l.id(i, j)] = surface.farther(l.at(i, j), h, hint));
+    if (any) far[t] = std::move(out);
+  });
+  if (std::all_of(far.begin(), far.end(), [](const std::vector<char>& out) { return out.empty(); })) return {};
+  surface.make_winding();
+  std::vector<std::vector<std::array<Point3d, 3>>> pieces(f.tris.size());
+  tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
+    if (far[t].empty()) return;
+    const Lattice l(f, t, h);
+    const int n = l.n;
+    auto at = [&](int i, int j) { return l.at(i, j); };
+    auto id = [&](int i, int j) { return l.id(i, j); };
+    std::vector<char>& out = far[t];
     // Which far samples lie outside: a far sample's neighbours in the
     // lattice are at most h away (the steps are sides / n <= h), nearer than
     // the surface is to it, so a far neighbour lies on its side; the winding
@@ -3480,18 +3504,26 @@ RebuildResult rebuild(const Soup& input, const RebuildOptions& options) {
   // of the input is dropped.
   if (options.sheets) {
     const ExtractedSurface surface(vertices, tris);
+    // (the facets with every corner that far first; then, the winding
+    // hierarchy built, those whose centre lies outside)
     std::vector<char> thin(f.tris.size(), 0);
     tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
       if (!f.sheet.empty() && f.sheet[t]) return;
-      Point3d c{0, 0, 0};
       std::size_t hint = SIZE_MAX;
-      for (int k = 0; k < 3; ++k) {
-        const Point3d& p = f.points[f.tris[t][k]];
-        if (!surface.farther(p, g.h, hint)) return;
-        for (int a = 0; a < 3; ++a) c[a] += p[a] / 3;
-      }
-      thin[t] = tris.empty() || surface.winding(c) <= 0.5;
+      for (int k = 0; k < 3; ++k)
+        if (!surface.farther(f.points[f.tris[t][k]], g.h, hint)) return;
+      thin[t] = 1;
     });
+    if (!tris.empty() && std::find(thin.begin(), thin.end(), 1) != thin.end()) {
+      surface.make_winding();
+      tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
+        if (!thin[t]) return;
+        Point3d c{0, 0, 0};
+        for (int k = 0; k < 3; ++k)
+          for (int a = 0; a < 3; ++a) c[a] += f.points[f.tris[t][k]][a] / 3;
+        thin[t] = surface.winding(c) <= 0.5;
+      });
+    }
     const std::size_t n_thin = std::size_t(std::count(thin.begin(), thin.end(), 1));
     if (n_thin > 0) {
       r.thin_facets = n_thin;

@@ -1,6 +1,8 @@
 #include "polyheal/repair/detail/winding.h"
 
 #include <boost/container/small_vector.hpp>
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -19,6 +21,12 @@ namespace {
 // (shark_b 0.110 -> 0.034; mech-holes-shark 0.030 -> 0.039), all under 0.04.
 constexpr double kBeta = 2.25, kBetaStrict = 8;
 constexpr std::size_t kLeaf = 8;
+// Subtrees over this many triangles build their halves in parallel.
+constexpr std::size_t kParallelBuild = 4096;
+
+/// The nodes of a subtree over n triangles (its shape depends on n only:
+/// the left half takes n / 2).
+std::size_t node_count(std::size_t n) { return n <= kLeaf ? 1 : 1 + node_count(n / 2) + node_count(n - n / 2); }
 
 double dist(const Point3d& a, const Point3d& b) { return norm(sub(a, b)); }
 
@@ -35,8 +43,10 @@ WindingNumber::WindingNumber(const std::vector<Point3d>& points, const std::vect
     twice_area_[t] = normal(P(t, 0), P(t, 1), P(t, 2));
   }
   if (order_.empty()) return;
-  nodes_.resize(1);
-  build(0, 0, order_.size());
+  nodes_.resize(node_count(order_.size()));
+  // Isolated: a thread waiting for the halves runs only their tasks (not,
+  // say, an outer loop's next iteration that asks for this same hierarchy).
+  tbb::this_task_arena::isolate([&] { build(0, 0, order_.size(), 1); });
   // The leaves' triangles, in the order the nodes hold them, side by side
   // (what evaluate() reads most, without an index and a point lookup per
   // corner); what only build() needed goes.
@@ -115,9 +125,11 @@ double WindingNumber::solid_angle(const std::array<Point3d, 3>& p, const Point3d
   return 2 * std::atan2(det, la * lb * lc + ab * lc + bc * la + ca * lb);
 }
 
-/// Fills node `slot` with the triangles order_[first, last); children are
-/// allocated as an adjacent pair.
-void WindingNumber::build(std::size_t slot, std::size_t first, std::size_t last) {
+/// Fills node `slot` with the triangles order_[first, last); its children
+/// are the pair at `next`, their descendants after them, the left's first
+/// (the slots a depth-first build allocating as it goes would give). The
+/// halves are disjoint ranges and slots, so large ones build in parallel.
+void WindingNumber::build(std::size_t slot, std::size_t first, std::size_t last, std::size_t next) {
   Node n;
   n.first = first;
   n.last = last;
@@ -151,10 +163,16 @@ void WindingNumber::build(std::size_t slot, std::size_t first, std::size_t last)
     const std::size_t mid = (first + last) / 2;
     std::nth_element(order_.begin() + first, order_.begin() + mid, order_.begin() + last,
                      [&](std::size_t x, std::size_t y) { return centroid_[x][axis] < centroid_[y][axis]; });
-    n.left = std::ptrdiff_t(nodes_.size());
-    nodes_.resize(nodes_.size() + 2);
-    build(std::size_t(n.left), first, mid);
-    build(std::size_t(n.left) + 1, mid, last);
+    n.left = std::ptrdiff_t(next);
+    const std::size_t right_next = next + 2 + node_count(mid - first) - 1;
+    auto left = [&] { build(next, first, mid, next + 2); };
+    auto right = [&] { build(next + 1, mid, last, right_next); };
+    if (last - first > kParallelBuild) {
+      tbb::parallel_invoke(left, right);
+    } else {
+      left();
+      right();
+    }
   }
   nodes_[slot] = n;
 }

@@ -43,7 +43,7 @@ class WindingNumber {
   double evaluate(const Point3d& q, double beta) const;
   double solid_angle(std::size_t t, const Point3d& q) const;
   static double solid_angle(const std::array<Point3d, 3>& corners, const Point3d& q);
-  void build(std::size_t slot, std::size_t first, std::size_t last);
+  void build(std::size_t slot, std::size_t first, std::size_t last, std::size_t next);
   const Point3d& P(std::size_t t, int k) const { return points_[tris_[t][k]]; }
 
   const std::vector<Point3d>& points_;
