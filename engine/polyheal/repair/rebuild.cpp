@@ -876,10 +876,6 @@ std::vector<FacePair> near_pairs_at_seam(const Soup& joined, const std::vector<T
   for (std::size_t t = 0; t < tris.size(); ++t) seam[t] = patch[t] >= 0;
   for (const VertexNearFace& p : find_vertices_near_faces(joined, tol, &seam))
     for (std::uint32_t t : stars.of(p.vertex)) add(t, std::uint32_t(p.face));
-  // The faces of edge e (closed and oriented: two).
-  auto faces_of = [&](const std::array<Index, 2>& e, std::uint32_t of[2]) {
-    return stars.faces_of_edge(tris, e[0], e[1], of);
-  };
   std::vector<std::array<Index, 2>> edges;
   std::vector<char> seam_edge;
   for (const Tri& t : tris)
@@ -887,12 +883,12 @@ std::vector<FacePair> near_pairs_at_seam(const Soup& joined, const std::vector<T
       if (t[k] < t[(k + 1) % 3]) {  // each edge once
         edges.push_back({t[k], t[(k + 1) % 3]});
         std::uint32_t f[2];
-        const int n = faces_of(edges.back(), f);
+        const int n = stars.faces_of_edge(tris, t[k], t[(k + 1) % 3], f);  // (closed and oriented: two)
         seam_edge.push_back(std::any_of(f, f + n, [&](std::uint32_t g) { return seam[g] != 0; }));
       }
   for (const EdgeNearEdge& p : find_edges_near_edges(joined, edges, tol, true, &seam_edge)) {
     std::uint32_t a[2], b[2];
-    const int m = faces_of(p.e, a), n = faces_of(p.f, b);
+    const int m = stars.faces_of_edge(tris, p.e[0], p.e[1], a), n = stars.faces_of_edge(tris, p.f[0], p.f[1], b);
     for (int i = 0; i < m; ++i)
       for (int j = 0; j < n; ++j) add(a[i], b[j]);
   }
@@ -1705,21 +1701,32 @@ Plane median_plane(const std::vector<Point3d>& points, const std::vector<char>& 
   return {axis, coordinate[n / 2]};
 }
 
-/// Whether v's second ring in `mesh` is in `part` of `plane`;
-/// `coordinate(w)`: vertex w's coordinate along the plane's axis.
+/// The least and greatest `coordinate(w)` over the vertices w of v's second
+/// ring in `mesh` (v, its neighbours and theirs).
 template <class M, class Coordinate>
-bool second_ring_in(const M& mesh, typename M::Vertex_index v, const Plane& plane, Part part, Coordinate coordinate) {
-  bool below = false, above = false;
-  auto see = [&](typename M::Vertex_index w) { (coordinate(w) < plane.at ? below : above) = true; };
-  see(v);
+std::pair<double, double> second_ring_span(const M& mesh, typename M::Vertex_index v, Coordinate coordinate) {
+  double lo = coordinate(v), hi = lo;
+  auto see = [&](typename M::Vertex_index w) {
+    const double c = coordinate(w);
+    lo = std::min(lo, c);
+    hi = std::max(hi, c);
+  };
   for (auto x : CGAL::vertices_around_target(mesh.halfedge(v), mesh)) {
     see(x);
     for (auto w : CGAL::vertices_around_target(mesh.halfedge(x), mesh)) see(w);
   }
+  return {lo, hi};
+}
+
+/// Whether v's second ring in `mesh` is in `part` of `plane`;
+/// `coordinate(w)`: vertex w's coordinate along the plane's axis.
+template <class M, class Coordinate>
+bool second_ring_in(const M& mesh, typename M::Vertex_index v, const Plane& plane, Part part, Coordinate coordinate) {
+  const auto [lo, hi] = second_ring_span(mesh, v, coordinate);
   switch (part) {
-    case Part::below: return !above;
-    case Part::above: return !below;
-    case Part::seam: return below && above;
+    case Part::below: return hi < plane.at;
+    case Part::above: return lo >= plane.at;
+    case Part::seam: return lo < plane.at && hi >= plane.at;
   }
   return false;
 }
@@ -2242,13 +2249,13 @@ class BoundedDecimation {
   /// neighbour (normals more than 179 degrees apart) and intersect nothing
   /// (the oracle's local query). Cube-marching chamfers become edges.
   /// `input`: the facets of `f`. The edge or corner must be one of the
-  /// input's: the target lies on it. `only`: the vertices to try (a flag
-  /// per vertex; all when none is given: sharpen_in_halves()).
-  std::size_t sharpen(const Facets& f, const detail::SurfaceDistance& input, double reach, double cos_feature,
-                      const std::vector<char>* only = nullptr) {
+  /// input's: the target lies on it; `unit`: the facets' unit normals
+  /// (unit_normals()). `only`: the vertices to try (a flag per vertex; all
+  /// when none is given: sharpen_in_halves()).
+  std::size_t sharpen(const Facets& f, const std::vector<Point3d>& unit, const detail::SurfaceDistance& input,
+                      double reach, double cos_feature, const std::vector<char>* only = nullptr) {
     const double on_input = 0.05 * reach;
     const double cos_same = std::cos(10 * M_PI / 180);
-    const std::vector<Point3d> unit = unit_normals(f);
     std::size_t moved = 0;
     std::vector<vertex_descriptor> all(mesh_.vertices().begin(), mesh_.vertices().end());
     for (vertex_descriptor v : all) {
@@ -2960,12 +2967,12 @@ std::size_t sharpen_in_halves(Mesh& mesh, const TriangleGrid& reference, double 
                               double reach, double cos_feature, bool parallel) {
   constexpr std::size_t kSplitFrom = 4096;  // vertices: below, sharpening costs little
   const std::size_t n = mesh.number_of_vertices() + mesh.number_of_removed_vertices();
+  const std::vector<Point3d> unit = unit_normals(f);
   if (mesh.number_of_vertices() < kSplitFrom)
-    return BoundedDecimation(mesh, reference, tolerance, diagonal, kept).sharpen(f, input, reach, cos_feature);
+    return BoundedDecimation(mesh, reference, tolerance, diagonal, kept).sharpen(f, unit, input, reach, cos_feature);
   // The plane halves the vertices that get past sharpen()'s first test
   // (facets round them meeting at more than the feature angle), where its
   // time goes.
-  const std::vector<Point3d> unit = unit_normals(f);
   const DecimationData data(mesh);
   std::vector<Point3d> at(n);
   std::vector<char> moves(n, 0);
@@ -2984,22 +2991,14 @@ std::size_t sharpen_in_halves(Mesh& mesh, const TriangleGrid& reference, double 
   const double margin = reach + 4 * InspectOptions().tetgen_epsilon * diagonal;
   std::vector<char> part[3] = {std::vector<char>(n, 0), std::vector<char>(n, 0), std::vector<char>(n, 0)};
   for (vertex_descriptor v : mesh.vertices()) {
-    double lo = HUGE_VAL, hi = -HUGE_VAL;
-    auto see = [&](vertex_descriptor w) {
-      lo = std::min(lo, at[static_cast<std::size_t>(w)][plane.axis]);
-      hi = std::max(hi, at[static_cast<std::size_t>(w)][plane.axis]);
-    };
-    see(v);
-    for (vertex_descriptor x : CGAL::vertices_around_target(mesh.halfedge(v), mesh)) {
-      see(x);
-      for (vertex_descriptor w : CGAL::vertices_around_target(mesh.halfedge(x), mesh)) see(w);
-    }
+    const auto [lo, hi] =
+        second_ring_span(mesh, v, [&](vertex_descriptor w) { return at[static_cast<std::size_t>(w)][plane.axis]; });
     part[hi < plane.at - margin ? 0 : lo > plane.at + margin ? 1 : 2][static_cast<std::size_t>(v)] = 1;
   }
   if (!parallel) {
     BoundedDecimation whole(mesh, reference, tolerance, diagonal, kept);
     std::size_t moved = 0;
-    for (const std::vector<char>& only : part) moved += whole.sharpen(f, input, reach, cos_feature, &only);
+    for (const std::vector<char>& only : part) moved += whole.sharpen(f, unit, input, reach, cos_feature, &only);
     return moved;
   }
   // The halves' instances are made at once too, before either moves a
@@ -3010,10 +3009,10 @@ std::size_t sharpen_in_halves(Mesh& mesh, const TriangleGrid& reference, double 
   std::size_t moved[2] = {0, 0};
   tbb::parallel_invoke([&] { half[0].emplace(mesh, reference, tolerance, diagonal, kept); },
                        [&] { half[1].emplace(mesh, reference, tolerance, diagonal, kept); });
-  tbb::parallel_invoke([&] { moved[0] = half[0]->sharpen(f, input, reach, cos_feature, &part[0]); },
-                       [&] { moved[1] = half[1]->sharpen(f, input, reach, cos_feature, &part[1]); });
+  tbb::parallel_invoke([&] { moved[0] = half[0]->sharpen(f, unit, input, reach, cos_feature, &part[0]); },
+                       [&] { moved[1] = half[1]->sharpen(f, unit, input, reach, cos_feature, &part[1]); });
   half[0]->moved_elsewhere(half[1]->sharpened());
-  return moved[0] + moved[1] + half[0]->sharpen(f, input, reach, cos_feature, &part[2]);
+  return moved[0] + moved[1] + half[0]->sharpen(f, unit, input, reach, cos_feature, &part[2]);
 }
 
 /// The bounded decimation: sweeps at a quarter, half and all of the
@@ -3183,9 +3182,6 @@ std::vector<std::array<Point3d, 3>> far_outside(const Facets& f, const Extracted
   tbb::parallel_for(std::size_t(0), f.tris.size(), [&](std::size_t t) {
     if (far[t].empty()) return;
     const Lattice l(f, t, h);
-    const int n = l.n;
-    auto at = [&](int i, int j) { return l.at(i, j); };
-    auto id = [&](int i, int j) { return l.id(i, j); };
     std::vector<char>& out = far[t];
     // Which far samples lie outside: a far sample's neighbours in the
     // lattice are at most h away (the steps are sides / n <= h), nearer than
@@ -3193,30 +3189,30 @@ std::vector<std::array<Point3d, 3>> far_outside(const Facets& f, const Extracted
     // number is asked once for each connected set of far samples.
     std::vector<char> labelled(out.size(), 0);
     std::vector<std::pair<int, int>> stack;
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i + j <= n; ++i) {
-        if (!out[id(i, j)] || labelled[id(i, j)]) continue;
-        const char outside = surface.winding(at(i, j)) < 0.5;
+    for (int j = 0; j <= l.n; ++j)
+      for (int i = 0; i + j <= l.n; ++i) {
+        if (!out[l.id(i, j)] || labelled[l.id(i, j)]) continue;
+        const char outside = surface.winding(l.at(i, j)) < 0.5;
         stack.assign(1, {i, j});
-        labelled[id(i, j)] = 1;
+        labelled[l.id(i, j)] = 1;
         while (!stack.empty()) {
           const auto [x, y] = stack.back();
           stack.pop_back();
-          out[id(x, y)] = outside;
+          out[l.id(x, y)] = outside;
           for (const auto& [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}, {1, -1}, {-1, 1}}) {
             const int u = x + dx, w = y + dy;
-            if (u < 0 || w < 0 || u + w > n || !out[id(u, w)] || labelled[id(u, w)]) continue;
-            labelled[id(u, w)] = 1;
+            if (u < 0 || w < 0 || u + w > l.n || !out[l.id(u, w)] || labelled[l.id(u, w)]) continue;
+            labelled[l.id(u, w)] = 1;
             stack.push_back({u, w});
           }
         }
       }
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i + j < n; ++i) {
-        if (out[id(i, j)] || out[id(i + 1, j)] || out[id(i, j + 1)])
-          pieces[t].push_back({at(i, j), at(i + 1, j), at(i, j + 1)});
-        if (i + j + 1 < n && (out[id(i + 1, j)] || out[id(i, j + 1)] || out[id(i + 1, j + 1)]))
-          pieces[t].push_back({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+    for (int j = 0; j < l.n; ++j)
+      for (int i = 0; i + j < l.n; ++i) {
+        if (out[l.id(i, j)] || out[l.id(i + 1, j)] || out[l.id(i, j + 1)])
+          pieces[t].push_back({l.at(i, j), l.at(i + 1, j), l.at(i, j + 1)});
+        if (i + j + 1 < l.n && (out[l.id(i + 1, j)] || out[l.id(i, j + 1)] || out[l.id(i + 1, j + 1)]))
+          pieces[t].push_back({l.at(i + 1, j), l.at(i + 1, j + 1), l.at(i, j + 1)});
       }
   });
   std::vector<std::array<Point3d, 3>> all;
