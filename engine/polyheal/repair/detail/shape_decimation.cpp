@@ -246,15 +246,22 @@ struct ShapeDecimator::Impl {
     // file, takes it.
     std::optional<std::vector<Triple>> kept;
     for_each_displaced(plan, [&](const Point3d& p) {
-      if (!ok || nearest(plan.proposed, p).second <= tol2) return;
+      if (!ok || any_near(plan.proposed, p)) return;
       if (o.fold_angle <= 0) {
         ok = false;
         return;
       }
       if (!kept) kept = corners_of(surrounding(plan));
-      if (nearest(*kept, p).second > tol2) ok = false;
+      if (!any_near(*kept, p)) ok = false;
     });
     return ok;
+  }
+  /// Whether some triangle of `tris` is within the tolerance of p (the
+  /// first found: nearest() answers the same, measuring them all).
+  bool any_near(const std::vector<Triple>& tris, const Point3d& p) const {
+    for (const Triple& t : tris)
+      if (squared_distance_to_triangle(p, approx(t[0]), approx(t[1]), approx(t[2])) <= tol2) return true;
+    return false;
   }
 
   /// The faces around an operation that it keeps: those sharing a vertex
@@ -302,6 +309,18 @@ struct ShapeDecimator::Impl {
         for (const Point3d& p : it->second) f(p);
     }
     if (!plan.flip) f(approx(mesh.source(plan.h)));
+  }
+
+  /// for_each_displaced()'s points, each once: the replaced faces' samples
+  /// share their corners and edges (a third of the points on ADIS16480's
+  /// fans were repeats), and a point's copies would go to the same face
+  /// (attach()) and answer the same there (within_tolerance()).
+  std::vector<Point3d> displaced_points(const Plan& plan) const {
+    std::vector<Point3d> out;
+    for_each_displaced(plan, [&](const Point3d& p) { out.push_back(p); });
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
   }
 
   std::pair<std::size_t, double> nearest(const std::vector<Triple>& tris, const Point3d& p) const {
@@ -553,8 +572,7 @@ struct ShapeDecimator::Impl {
   // ---- applying ----
 
   std::vector<face_descriptor> apply(const Plan& plan) {
-    std::vector<Point3d> displaced;
-    for_each_displaced(plan, [&](const Point3d& p) { displaced.push_back(p); });
+    const std::vector<Point3d> displaced = displaced_points(plan);
     const std::vector<face_descriptor> around =
         o.fold_angle > 0 ? surrounding(plan) : std::vector<face_descriptor>{};  // kept: descriptors stay valid
     for (face_descriptor f : plan.replaced) {
@@ -665,8 +683,7 @@ struct ShapeDecimator::Impl {
     if (!acceptable(plan) || !within_tolerance(plan) || index.would_intersect(plan.proposed, plan.replaced))
       return discard();
 
-    std::vector<Point3d> displaced;
-    for_each_displaced(plan, [&](const Point3d& p) { displaced.push_back(p); });
+    const std::vector<Point3d> displaced = displaced_points(plan);
     const std::optional<FaceOriginMap> origin = face_origin_map(mesh);
     std::vector<std::int64_t> origins;
     for (face_descriptor f : r.sector_faces) origins.push_back(origin ? (*origin)[f] : -1);
