@@ -343,7 +343,8 @@ TEST_CASE("distance: Hausdorff of a removed interior finds its deepest point", "
   CHECK(d[1] <= 1e-12);  // the outer sphere is in both
 }
 
-TEST_CASE("distance: nearest-triangle and box queries agree with a search of every triangle", "[repair][distance]") {
+TEST_CASE("distance: nearest-triangle, within and box queries agree with a search of every triangle",
+          "[repair][distance]") {
   // The index splits long triangles into pieces (the needle fans of the
   // plate, up to 4 long beside 0.02-wide ones) and prunes by box distance;
   // neither may change an answer. Random well-shaped triangles are mixed in.
@@ -358,6 +359,7 @@ TEST_CASE("distance: nearest-triangle and box queries agree with a search of eve
   }
   const detail::SurfaceDistance d(s);
   auto corner = [&](std::size_t f, int k) { return s.points[s.face(f)[k]]; };
+  detail::SurfaceDistance::Recent recent;
   for (int k = 0; k < 3000; ++k) {
     const Point3d p{u(rng), u(rng) / 5, small(rng)};
     double want = std::numeric_limits<double>::infinity();
@@ -370,6 +372,14 @@ TEST_CASE("distance: nearest-triangle and box queries agree with a search of eve
     CHECK(std::abs(got - want) <= slack);
     CHECK(std::abs(detail::squared_distance_to_triangle(p, corner(t, 0), corner(t, 1), corner(t, 2)) - want) <= slack);
     CHECK(std::abs(d.nearest(p, std::size_t(k) % s.face_count()).first - want) <= slack);  // any hint
+    // "Is a triangle within r?" with either kind of hint: the last triangle
+    // found, or the recent ones (kept across all these queries).
+    for (double r2 : {0.0004, 0.01, 0.04}) {
+      if (std::abs(want - r2) <= slack) continue;  // (the last bit may differ)
+      std::size_t hint = std::size_t(k) % s.face_count();
+      CHECK(d.any_within(p, r2, hint) == (want <= r2));
+      CHECK(d.any_within(p, r2, recent) == (want <= r2));
+    }
   }
   for (int k = 0; k < 300; ++k) {
     const Point3d c{u(rng), u(rng) / 5, small(rng)};

@@ -691,6 +691,24 @@ bool SurfaceDistance::any_within(const Point3d& p, double r2, std::size_t& hint)
   return impl_->bvh->any_within(q, r2, hint);
 }
 
+bool SurfaceDistance::any_within(const Point3d& p, double r2, Recent& recent) const {
+  const V3 q{p[0], p[1], p[2]};
+  auto to_front = [&](std::size_t i, std::size_t t) {  // t goes first; those before i move up one
+    for (; i > 0; --i) recent.triangle[i] = recent.triangle[i - 1];
+    recent.triangle[0] = t;
+  };
+  for (std::size_t i = 0; i < recent.count; ++i)
+    if (recent.triangle[i] < impl_->triangles.size() && impl_->bvh->distance2(q, recent.triangle[i]) <= r2) {
+      to_front(i, recent.triangle[i]);
+      return true;
+    }
+  std::size_t found = 0;
+  if (!impl_->bvh->any_within(q, r2, found)) return false;
+  if (recent.count < recent.triangle.size()) ++recent.count;
+  to_front(recent.count - 1, found);
+  return true;
+}
+
 std::vector<std::size_t> SurfaceDistance::triangles_near(const Point3d& lo, const Point3d& hi) const {
   return impl_->bvh->meeting(lo, hi);
 }

@@ -76,6 +76,7 @@ struct ShapeDecimator::Impl {
     }
   };
   mutable std::unordered_map<NearKey, bool, NearKeyHash> near_input_cache;
+  mutable SurfaceDistance::Recent recent;  // near_input()'s hints
   /// Double approximations of the vertices, computed once (NaN: not yet).
   Mesh::Property_map<vertex_descriptor, Point3d> approx_point;
 
@@ -185,9 +186,10 @@ struct ShapeDecimator::Impl {
 
   /// Samples of triangle t near the input surface. "Within the tolerance"
   /// needs one input triangle close enough, not the nearest: the search
-  /// stops at the first (`last`, the one found before, is tried first:
-  /// neighbouring samples share it).
-  bool near_input(const Triple& t, std::size_t& last) const {
+  /// stops at the first (the triangles found last, `recent`, are tried
+  /// first: neighbouring samples, and the candidates round one face, share
+  /// them).
+  bool near_input(const Triple& t) const {
     // Every vertex lies on the input surface, so a triangle no longer than
     // the tolerance is within it everywhere; longer ones are sampled.
     const NearKey corner{approx(t[0]), approx(t[1]), approx(t[2])};
@@ -202,11 +204,11 @@ struct ShapeDecimator::Impl {
     // on CAD fans the same candidate triangles come up again whenever a
     // neighbour changes (ADIS16480: 157k asked, 70k distinct).
     if (const auto it = near_input_cache.find(corner); it != near_input_cache.end()) return it->second;
-    const bool ok = sampled_near_input(t, corner, longest2, last);
+    const bool ok = sampled_near_input(t, corner, longest2);
     near_input_cache.emplace(corner, ok);
     return ok;
   }
-  bool sampled_near_input(const Triple& t, const NearKey& corner, double longest2, std::size_t& last) const {
+  bool sampled_near_input(const Triple& t, const NearKey& corner, double longest2) const {
     const int steps = std::min(6, 1 + static_cast<int>(std::sqrt(longest2 / tol2)));
     // The corners lie on the input: a sample within the tolerance of one
     // needs no search. The others are searched farthest from the corners
@@ -223,7 +225,7 @@ struct ShapeDecimator::Impl {
     });
     std::stable_sort(far.begin(), far.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
     for (const auto& [d2, p] : far)
-      if (!input.any_within(p, tol2, last)) return false;
+      if (!input.any_within(p, tol2, recent)) return false;
     return true;
   }
 
@@ -232,9 +234,8 @@ struct ShapeDecimator::Impl {
   /// (and a collapse's own removed vertex) near the new triangles.
   bool within_tolerance(const Plan& plan) const {
     bool ok = true;
-    std::size_t last = std::numeric_limits<std::size_t>::max();
     for (const Triple& t : plan.proposed)
-      if (!near_input(t, last)) return false;
+      if (!near_input(t)) return false;
     // With folds (fold_angle), a displaced point may be covered by a face
     // the operation keeps: a fold's spike lies on the face it is folded
     // onto. Not otherwise: on the corpus's self-overlapping mpi_and_sphere
@@ -438,7 +439,6 @@ struct ShapeDecimator::Impl {
     std::vector<double> best(n * n);
     std::vector<int> cut(n * n);
     std::vector<std::array<std::size_t, 3>> tris;
-    std::size_t last = std::numeric_limits<std::size_t>::max();
     for (int attempt = 0;; ++attempt) {
       if (attempt == 4) return false;
       std::fill(best.begin(), best.end(), 180.0);
@@ -473,7 +473,7 @@ struct ShapeDecimator::Impl {
       }
       bool more = false;
       for (const auto& t : tris)
-        if (!near_input({ring[t[0]], ring[t[1]], ring[t[2]]}, last)) {
+        if (!near_input({ring[t[0]], ring[t[1]], ring[t[2]]})) {
           forbidden[at(t[0], t[1], t[2])] = 1;
           more = true;
         }
