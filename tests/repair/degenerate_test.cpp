@@ -528,6 +528,34 @@ TEST_CASE("degenerate: a split point takes its doubles early only where that cha
     CHECK(m.point(v) == Point(1.0 / 3.0, 1, 1.0 / 3.0));
     CHECK_FALSE(round_if_unchanged(m, index, v, cos_cap, cos_needle));  // already doubles
   }
+  SECTION("all at once (round_all_if_unchanged): a slice's points move together where each would alone") {
+    using FT = Kernel::FT;
+    const std::vector<Point> pts{Point(0, 0, 0), Point(1, 0, 0), Point(FT(1) / FT(3), FT(1), FT(1) / FT(3)),
+                                 Point(FT(2) / FT(3), FT(1), FT(1) / FT(7))};
+    Mesh one = mesh_of(pts, {{0, 1, 2}, {1, 3, 2}}), all = mesh_of(pts, {{0, 1, 2}, {1, 3, 2}});
+    LocalIndex one_index(one), all_index(all);
+    const std::vector<vertex_descriptor> split{vertex_descriptor(2), vertex_descriptor(3)};
+    CHECK(detail::round_all_if_unchanged(all, all_index, split, cos_cap, cos_needle) == std::optional<std::size_t>(2));
+    for (vertex_descriptor v : split) CHECK(round_if_unchanged(one, one_index, v, cos_cap, cos_needle));
+    for (vertex_descriptor v : split) CHECK(all.point(v) == one.point(v));
+    CHECK(all_index.intersections({face_descriptor(0), face_descriptor(1)}).empty());
+    CHECK(detail::round_all_if_unchanged(all, all_index, split, cos_cap, cos_needle) == std::optional<std::size_t>(0));
+  }
+  SECTION("all at once: one point that may not move stops them all (then they go one by one)") {
+    // the first face's apex would round onto its base line (degenerate);
+    // the second face's apex rounds as in the section above
+    using FT = Kernel::FT;
+    const Point third(FT(1) / FT(3), FT(1), FT(1) / FT(3) + FT(5));
+    Mesh m = mesh_of({Point(0, 0, 0), Point(1, 0, 0), Point(FT(0.5), tiny, FT(0)), Point(0, 0, 5), Point(1, 0, 5), third},
+                     {{0, 1, 2}, {3, 4, 5}});
+    LocalIndex index(m);
+    const std::vector<vertex_descriptor> split{vertex_descriptor(2), vertex_descriptor(5)};
+    CHECK_FALSE(detail::round_all_if_unchanged(m, index, split, cos_cap, cos_needle));
+    CHECK(m.point(split[0]).y() == tiny);
+    CHECK(m.point(split[1]) == third);
+    CHECK_FALSE(round_if_unchanged(m, index, split[0], cos_cap, cos_needle));
+    CHECK(round_if_unchanged(m, index, split[1], cos_cap, cos_needle));
+  }
 }
 
 namespace {

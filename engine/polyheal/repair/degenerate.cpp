@@ -825,8 +825,11 @@ class Pipeline {
   /// nothing the oracle checks around it (detail::round_if_unchanged), so
   /// that the exact tests after it run on doubles instead of the slices'
   /// rationals. A point where it would stays exact (rounded at the end).
-  /// Returns the points moved.
+  /// All at once first (detail::round_all_if_unchanged: one check, on
+  /// doubles; ADIS16480: 500 slices, none refused), one by one when that
+  /// is refused. Returns the points moved.
   std::size_t settle(const std::vector<vertex_descriptor>& points) {
+    if (const auto all = detail::round_all_if_unchanged(mesh_, index_, points, cos_cap_, cos_needle_)) return *all;
     std::size_t moved = 0;
     for (vertex_descriptor v : points)
       moved += !mesh_.is_removed(v) && detail::round_if_unchanged(mesh_, index_, v, cos_cap_, cos_needle_);

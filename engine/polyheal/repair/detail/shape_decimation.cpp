@@ -842,4 +842,45 @@ bool round_if_unchanged(Mesh& mesh, LocalIndex& index, vertex_descriptor v, doub
   return true;
 }
 
+std::optional<std::size_t> round_all_if_unchanged(Mesh& mesh, LocalIndex& index,
+                                                  const std::vector<vertex_descriptor>& points, double cos_cap,
+                                                  double cos_needle) {
+  std::vector<std::pair<vertex_descriptor, Point>> old;  // the points moved, and where they were
+  for (vertex_descriptor v : points) {
+    if (mesh.is_removed(v) || mesh.is_isolated(v)) continue;
+    const Point q = nearest_double_point(mesh.point(v));
+    if (q == mesh.point(v)) continue;
+    old.emplace_back(v, mesh.point(v));
+  }
+  if (old.empty()) return std::size_t(0);
+  std::vector<face_descriptor> around;
+  for (const auto& [v, p] : old)
+    for (face_descriptor f : CGAL::faces_around_target(mesh.halfedge(v), mesh))
+      if (f != Mesh::null_face()) around.push_back(f);
+  std::sort(around.begin(), around.end());
+  around.erase(std::unique(around.begin(), around.end()), around.end());
+  std::vector<std::array<vertex_descriptor, 3>> proposed;
+  std::vector<std::array<Point, 3>> before;
+  for (face_descriptor f : around) {
+    const halfedge_descriptor h = mesh.halfedge(f);
+    proposed.push_back({mesh.source(h), mesh.target(h), mesh.target(mesh.next(h))});
+    before.push_back({mesh.point(proposed.back()[0]), mesh.point(proposed.back()[1]), mesh.point(proposed.back()[2])});
+  }
+  for (const auto& [v, p] : old) mesh.point(v) = nearest_double_point(p);
+  bool ok = true;
+  for (std::size_t i = 0; ok && i < proposed.size(); ++i) {
+    const Point &a = mesh.point(proposed[i][0]), &b = mesh.point(proposed[i][1]), &c = mesh.point(proposed[i][2]);
+    const Shape after = classify_triangle(a, b, c, cos_cap, cos_needle);
+    ok = (after == Shape::fine || after == classify_triangle(before[i][0], before[i][1], before[i][2], cos_cap,
+                                                               cos_needle)) &&
+         normals_agree(before[i][0], before[i][1], before[i][2], a, b, c);
+  }
+  if (ok && !index.would_intersect(proposed, around)) {
+    index.update(around);
+    return old.size();
+  }
+  for (const auto& [v, p] : old) mesh.point(v) = p;
+  return std::nullopt;
+}
+
 }  // namespace polyheal::detail
