@@ -140,6 +140,42 @@ TEST_CASE("predicates: normals_agree equals the exact sign of the normals' dot p
   CHECK(other > 300);
 }
 
+TEST_CASE("predicates: normals_agree on double points (its static filter) equals the exact sign", "[inspect]") {
+  // Double points: small integers (exactly perpendicular or parallel normals
+  // are common: the dot product is exactly zero), random doubles at scales
+  // from 1e-80 to 1e75 (the filter's range guards), and pairs whose normals
+  // are perpendicular but for the rounding of one corner (an ulp off).
+  std::mt19937_64 rng(78);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::uniform_int_distribution<int> small(-2, 2);
+  const double scales[] = {1e-80, 1e-60, 1.0, 3e40, 1e75};
+  int positive = 0, zero = 0, negative = 0;
+  for (int i = 0; i < 6000; ++i) {
+    std::array<Point, 6> p;
+    if (i % 3 == 0) {
+      for (Point& x : p) x = Point(small(rng), small(rng), small(rng));
+    } else if (i % 3 == 1) {
+      const double k = scales[(i / 3) % 5];
+      for (Point& x : p) x = Point(k * u(rng), k * u(rng), k * u(rng));
+    } else {  // def's normal perpendicular to abc's, then e rounded
+      const double k = scales[(i / 3) % 5];
+      for (int j = 0; j < 4; ++j) p[j] = Point(k * u(rng), k * u(rng), k * u(rng));
+      const Kernel::Vector_3 n = CGAL::cross_product(p[1] - p[0], p[2] - p[0]);
+      const Point e = p[3] + n * Kernel::FT(1 / (k * k)), f = p[3] + (p[1] - p[0]);
+      p[4] = Point(CGAL::to_double(e.x()), CGAL::to_double(e.y()), CGAL::to_double(e.z()));
+      p[5] = Point(CGAL::to_double(f.x()), CGAL::to_double(f.y()), CGAL::to_double(f.z()));
+    }
+    const Kernel::FT dot =
+        CGAL::cross_product(p[1] - p[0], p[2] - p[0]) * CGAL::cross_product(p[4] - p[3], p[5] - p[3]);
+    INFO("case " << i);
+    CHECK(normals_agree(p[0], p[1], p[2], p[3], p[4], p[5]) == CGAL::is_positive(dot));
+    ++(CGAL::is_positive(dot) ? positive : CGAL::is_zero(dot) ? zero : negative);
+  }
+  CHECK(positive > 500);
+  CHECK(zero > 200);
+  CHECK(negative > 500);
+}
+
 TEST_CASE("predicates: is_nearly_on_segment equals exact rational evaluation, at its tolerance and off the ends",
           "[inspect]") {
   // Points at a random fraction 0.5-2 of eps |ab| from the line, in a random

@@ -192,7 +192,48 @@ Shape classify_triangle(const Point& a, const Point& b, const Point& c, double c
 }
 
 
+namespace {
+
+/// Static filter for normals_agree on doubles: the sign of
+/// D = ((b - a) x (c - a)) . ((e - d) x (f - d)), or 0 when the bound below
+/// does not decide it. Each difference carries a relative error <= eps, each
+/// cross-product component n_i = x - y <= 4 eps P_i with P_i = |x| + |y| (the
+/// magnitudes of its two products), each term n_i m_i <= 8 eps P_i Q_i more
+/// and the sum 3 eps of the terms' magnitudes: |D~ - D| <= 11 eps sum P_i Q_i
+/// (eps = 2^-53; second-order terms in the margin: 1e-13 > 900 eps). As in
+/// static_angle, magnitudes outside [1e-70, 1e70] or a scale near the
+/// underflow range are left to the intervals.
+int static_normals_sign(const std::array<Point3d, 6>& p) {
+  double u[3], v[3], s[3], t[3], m = 0;
+  for (int i = 0; i < 3; ++i) {
+    u[i] = p[1][i] - p[0][i];
+    v[i] = p[2][i] - p[0][i];
+    s[i] = p[4][i] - p[3][i];
+    t[i] = p[5][i] - p[3][i];
+    m = std::max({m, std::fabs(u[i]), std::fabs(v[i]), std::fabs(s[i]), std::fabs(t[i])});
+  }
+  if (!(m > 1e-70 && m < 1e70)) return 0;
+  double dot = 0, scale = 0;
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3, k = (i + 2) % 3;
+    const double n = u[j] * v[k] - u[k] * v[j], o = s[j] * t[k] - s[k] * t[j];
+    dot += n * o;
+    scale += (std::fabs(u[j] * v[k]) + std::fabs(u[k] * v[j])) * (std::fabs(s[j] * t[k]) + std::fabs(s[k] * t[j]));
+  }
+  if (!(scale > 1e-250)) return 0;
+  if (dot > 1e-13 * scale) return 1;
+  if (dot < -1e-13 * scale) return -1;
+  return 0;
+}
+
+}  // namespace
+
 bool normals_agree(const Point& a, const Point& b, const Point& c, const Point& d, const Point& e, const Point& f) {
+  if (is_double_point(a) && is_double_point(b) && is_double_point(c) && is_double_point(d) && is_double_point(e) &&
+      is_double_point(f)) {
+    auto at = [](const Point& x) { const auto q = to_input_point(x); return Point3d{q.x(), q.y(), q.z()}; };
+    if (const int sign = static_normals_sign({at(a), at(b), at(c), at(d), at(e), at(f)}); sign != 0) return sign > 0;
+  }
   {
     CGAL::Protect_FPU_rounding<true> protect;
     const Interval s = dot(cross(isub(b, a), isub(c, a)), cross(isub(e, d), isub(f, d)));
