@@ -815,33 +815,6 @@ void ShapeDecimator::set_retriangulate(bool on) { impl_->retriangulate = on; }
 bool ShapeDecimator::is_bad(face_descriptor f) const { return impl_->is_bad(f); }
 const DecimationStats& ShapeDecimator::stats() const { return impl_->stats; }
 
-bool round_if_unchanged(Mesh& mesh, LocalIndex& index, vertex_descriptor v, double cos_cap, double cos_needle) {
-  if (mesh.is_isolated(v)) return false;
-  const Point p = mesh.point(v);
-  const Point q = nearest_double_point(p);
-  if (q == p) return false;
-  std::vector<std::array<vertex_descriptor, 3>> proposed;
-  std::vector<face_descriptor> around;
-  for (halfedge_descriptor h : CGAL::halfedges_around_target(mesh.halfedge(v), mesh)) {
-    const face_descriptor f = mesh.face(h);
-    if (f == Mesh::null_face()) continue;
-    const vertex_descriptor b = mesh.target(mesh.next(h)), c = mesh.source(h);
-    const Point &pb = mesh.point(b), &pc = mesh.point(c);
-    const Shape after = classify_triangle(q, pb, pc, cos_cap, cos_needle);
-    if (after != Shape::fine && after != classify_triangle(p, pb, pc, cos_cap, cos_needle)) return false;
-    if (!normals_agree(p, pb, pc, q, pb, pc)) return false;
-    around.push_back(f);
-    proposed.push_back({v, b, c});
-  }
-  mesh.point(v) = q;  // would_intersect asks about the current positions
-  if (index.would_intersect(proposed, around)) {
-    mesh.point(v) = p;
-    return false;
-  }
-  index.update(around);
-  return true;
-}
-
 std::optional<std::size_t> round_all_if_unchanged(Mesh& mesh, LocalIndex& index,
                                                   const std::vector<vertex_descriptor>& points, double cos_cap,
                                                   double cos_needle) {
@@ -881,6 +854,10 @@ std::optional<std::size_t> round_all_if_unchanged(Mesh& mesh, LocalIndex& index,
   }
   for (const auto& [v, p] : old) mesh.point(v) = p;
   return std::nullopt;
+}
+
+bool round_if_unchanged(Mesh& mesh, LocalIndex& index, vertex_descriptor v, double cos_cap, double cos_needle) {
+  return round_all_if_unchanged(mesh, index, {v}, cos_cap, cos_needle) == std::optional<std::size_t>(1);
 }
 
 }  // namespace polyheal::detail
