@@ -140,6 +140,54 @@ TEST_CASE("predicates: normals_agree equals the exact sign of the normals' dot p
   CHECK(other > 300);
 }
 
+TEST_CASE("predicates: fold_angle_less (its static filter, then intervals) equals exact rational evaluation",
+          "[inspect]") {
+  // The angle between n1 = (q - p) x (r - p) and n2 = (q - p) x (s - p)
+  // against acos(c): generic doubles at scales from 1e-40 to 1e40 (the
+  // filter's range guards), small integers (exact right angles, parallel
+  // and opposite normals) and angles within a few ulps of the threshold
+  // (r, s round an axis at angles phi = acos(c) +- tiny, then rounded).
+  std::mt19937_64 rng(79);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::uniform_int_distribution<int> small(-2, 2);
+  const double scales[] = {1e-40, 1e-20, 1.0, 1e20, 1e40};
+  const double cosines[] = {std::cos(1.0 * M_PI / 180), std::cos(179.0 * M_PI / 180), 0.5, -0.25};
+  int less = 0, not_less = 0;
+  for (int i = 0; i < 8000; ++i) {
+    const double c = cosines[i % 4], k = scales[(i / 4) % 5];
+    Point3d p, q, r, s;
+    if (i % 3 == 0) {
+      for (Point3d* x : {&p, &q, &r, &s}) *x = {k * u(rng), k * u(rng), k * u(rng)};
+    } else if (i % 3 == 1) {
+      for (Point3d* x : {&p, &q, &r, &s}) *x = {double(small(rng)), double(small(rng)), double(small(rng))};
+    } else {
+      const double phi = std::acos(c) + 1e-15 * u(rng), o[3] = {k * u(rng), k * u(rng), k * u(rng)};
+      p = {o[0], o[1], o[2]};
+      q = {o[0] + k, o[1], o[2]};
+      r = {o[0] + k * u(rng), o[1] + k, o[2]};
+      s = {o[0] + k * u(rng), o[1] + k * std::cos(phi), o[2] + k * std::sin(phi)};
+    }
+    auto sub = [](const Point3d& x, const Point3d& y) {
+      return std::array<Q, 3>{Q(x[0]) - Q(y[0]), Q(x[1]) - Q(y[1]), Q(x[2]) - Q(y[2])};
+    };
+    auto cross = [](const std::array<Q, 3>& x, const std::array<Q, 3>& y) {
+      return std::array<Q, 3>{x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]};
+    };
+    auto dot = [](const std::array<Q, 3>& x, const std::array<Q, 3>& y) -> Q {
+      return x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+    };
+    const std::array<Q, 3> e = sub(q, p), n1 = cross(e, sub(r, p)), n2 = cross(e, sub(s, p));
+    const Q d = dot(n1, n2), T = d * d - Q(c) * Q(c) * dot(n1, n1) * dot(n2, n2);
+    // angle < acos(c) <=> n1.n2 > c |n1| |n2|
+    const bool want = c >= 0 ? (d > 0 && T > 0) : (d >= 0 || T < 0);
+    INFO("case " << i);
+    CHECK(fold_angle_less(p, q, r, s, c) == want);
+    ++(want ? less : not_less);
+  }
+  CHECK(less > 1000);
+  CHECK(not_less > 1000);
+}
+
 TEST_CASE("predicates: normals_agree on double points (its static filter) equals the exact sign", "[inspect]") {
   // Double points: small integers (exactly perpendicular or parallel normals
   // are common: the dot product is exactly zero), random doubles at scales

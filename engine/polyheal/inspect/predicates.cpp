@@ -88,6 +88,24 @@ struct StaticAngle {
   int test_sign = 0;  // sign of (u.v)^2 - c^2 (u.u)(v.v)
 };
 
+/// The signs of d = u.v and T = (u.v)^2 - c^2 (u.u)(v.v) when the computed
+/// values decide them: |T - T~| and |d - d~| are below 1e-13 times `scale`
+/// and D (the callers' error bounds), away from underflow.
+StaticAngle decided_signs(double d, double D, double T, double scale) {
+  StaticAngle r;
+  if (!(scale > 1e-250) || std::fabs(T) <= 1e-13 * scale) return r;
+  if (T < 0) {  // decides alone (see angle_signs): a right angle needs no sign of u.v
+    r.decided = true;
+    r.test_sign = -1;
+    return r;
+  }
+  if (std::fabs(d) <= 1e-13 * D) return r;
+  r.decided = true;
+  r.dot_sign = d > 0 ? 1 : -1;
+  r.test_sign = 1;
+  return r;
+}
+
 StaticAngle static_angle(const Point3d& apex, const Point3d& b, const Point3d& c, double cos_threshold) {
   StaticAngle r;
   double u[3], v[3], m = 0;
@@ -101,20 +119,7 @@ StaticAngle static_angle(const Point3d& apex, const Point3d& b, const Point3d& c
   const double D = std::fabs(u[0] * v[0]) + std::fabs(u[1] * v[1]) + std::fabs(u[2] * v[2]);
   const double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
   const double R = cos_threshold * cos_threshold * uu * vv;
-  const double scale = D * D + R;
-  if (!(scale > 1e-250)) return r;
-  const double T = d * d - R;
-  if (std::fabs(T) <= 1e-13 * scale) return r;
-  if (T < 0) {  // decides alone (see angle_signs): a right angle needs no sign of u.v
-    r.decided = true;
-    r.test_sign = -1;
-    return r;
-  }
-  if (std::fabs(d) <= 1e-13 * D) return r;
-  r.decided = true;
-  r.dot_sign = d > 0 ? 1 : -1;
-  r.test_sign = 1;
-  return r;
+  return decided_signs(d, D, d * d - R, D * D + R);
 }
 
 /// angle > acos(c)  <=>  u.v < c |u||v|, from the signs of u.v and T.
@@ -290,9 +295,49 @@ bool angle_less(const Point3d& apex, const Point3d& b, const Point3d& c, double 
   return angle_at(apex, b, c, cos_threshold, less_from_signs);
 }
 
+namespace {
+
+/// Static filter for fold_angle_less, in the form of static_angle: the signs
+/// angle_signs() gives for n1 = e x a and n2 = e x b (e = q - p, a = r - p,
+/// b = s - p), from forward error bounds. Each cross-product component
+/// carries <= 4 eps P_i (P_i: the magnitudes of its two products), so
+/// d = n1.n2 carries <= 11 eps D with D = sum P1_i P2_i, each |n|^2 <= 11 eps
+/// A with A = sum P_i^2, and T = d^2 - c^2 |n1|^2 |n2|^2 <= 26 eps (D^2 +
+/// c^2 A1 A2) (eps = 2^-53; second-order terms in the margin: 1e-13).
+/// T is of degree 8 in the differences: outside [1e-35, 1e35], or with a
+/// scale near the underflow range, the intervals decide.
+StaticAngle static_fold(const Point3d& p, const Point3d& q, const Point3d& r, const Point3d& s, double c) {
+  StaticAngle out;
+  double e[3], a[3], b[3], m = 0;
+  for (int i = 0; i < 3; ++i) {
+    e[i] = q[i] - p[i];
+    a[i] = r[i] - p[i];
+    b[i] = s[i] - p[i];
+    m = std::max({m, std::fabs(e[i]), std::fabs(a[i]), std::fabs(b[i])});
+  }
+  if (!(m > 1e-35 && m < 1e35)) return out;
+  double d = 0, D = 0, n1n1 = 0, n2n2 = 0, A1 = 0, A2 = 0;
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3, k = (i + 2) % 3;
+    const double n1 = e[j] * a[k] - e[k] * a[j], n2 = e[j] * b[k] - e[k] * b[j];
+    const double p1 = std::fabs(e[j] * a[k]) + std::fabs(e[k] * a[j]), p2 = std::fabs(e[j] * b[k]) + std::fabs(e[k] * b[j]);
+    d += n1 * n2;
+    D += p1 * p2;
+    n1n1 += n1 * n1;
+    n2n2 += n2 * n2;
+    A1 += p1 * p1;
+    A2 += p2 * p2;
+  }
+  return decided_signs(d, D, d * d - c * c * n1n1 * n2n2, D * D + c * c * A1 * A2);
+}
+
+}  // namespace
+
 bool fold_angle_less(const Point3d& p, const Point3d& q, const Point3d& r, const Point3d& s, double cos_threshold) {
   // n1 = pq x pr and n2 = pq x ps are parallel when r and s lie on the same
   // half-plane (folded) and opposite when the surface is flat.
+  if (const StaticAngle st = static_fold(p, q, r, s, cos_threshold); st.decided)
+    return less_from_signs(st.dot_sign, st.test_sign, cos_threshold);
   const auto [dot_sign, test_sign] = filtered([&](auto nt) {
     using NT = decltype(nt);
     const Vec<NT> e = sub<NT>(q, p);
