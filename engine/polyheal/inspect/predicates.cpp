@@ -199,6 +199,21 @@ Shape classify_triangle(const Point& a, const Point& b, const Point& c, double c
 
 namespace {
 
+/// u x v on doubles with, per component n_i = x - y, the magnitude
+/// P_i = |x| + |y| of its two products: the static filters below bound the
+/// component's error by 4 eps P_i (eps = 2^-53; the differences u, v each
+/// carry a relative error <= eps).
+struct BoundedCross {
+  double n[3], p[3];
+  BoundedCross(const double u[3], const double v[3]) {
+    for (int i = 0; i < 3; ++i) {
+      const int j = (i + 1) % 3, k = (i + 2) % 3;
+      n[i] = u[j] * v[k] - u[k] * v[j];
+      p[i] = std::fabs(u[j] * v[k]) + std::fabs(u[k] * v[j]);
+    }
+  }
+};
+
 /// Static filter for normals_agree on doubles: the sign of
 /// D = ((b - a) x (c - a)) . ((e - d) x (f - d)), or 0 when the bound below
 /// does not decide it. Each difference carries a relative error <= eps, each
@@ -218,12 +233,11 @@ int static_normals_sign(const std::array<Point3d, 6>& p) {
     m = std::max({m, std::fabs(u[i]), std::fabs(v[i]), std::fabs(s[i]), std::fabs(t[i])});
   }
   if (!(m > 1e-70 && m < 1e70)) return 0;
+  const BoundedCross n1(u, v), n2(s, t);
   double dot = 0, scale = 0;
   for (int i = 0; i < 3; ++i) {
-    const int j = (i + 1) % 3, k = (i + 2) % 3;
-    const double n = u[j] * v[k] - u[k] * v[j], o = s[j] * t[k] - s[k] * t[j];
-    dot += n * o;
-    scale += (std::fabs(u[j] * v[k]) + std::fabs(u[k] * v[j])) * (std::fabs(s[j] * t[k]) + std::fabs(s[k] * t[j]));
+    dot += n1.n[i] * n2.n[i];
+    scale += n1.p[i] * n2.p[i];
   }
   if (!(scale > 1e-250)) return 0;
   if (dot > 1e-13 * scale) return 1;
@@ -316,17 +330,15 @@ StaticAngle static_fold(const Point3d& p, const Point3d& q, const Point3d& r, co
     m = std::max({m, std::fabs(e[i]), std::fabs(a[i]), std::fabs(b[i])});
   }
   if (!(m > 1e-35 && m < 1e35)) return out;
+  const BoundedCross n1(e, a), n2(e, b);
   double d = 0, D = 0, n1n1 = 0, n2n2 = 0, A1 = 0, A2 = 0;
   for (int i = 0; i < 3; ++i) {
-    const int j = (i + 1) % 3, k = (i + 2) % 3;
-    const double n1 = e[j] * a[k] - e[k] * a[j], n2 = e[j] * b[k] - e[k] * b[j];
-    const double p1 = std::fabs(e[j] * a[k]) + std::fabs(e[k] * a[j]), p2 = std::fabs(e[j] * b[k]) + std::fabs(e[k] * b[j]);
-    d += n1 * n2;
-    D += p1 * p2;
-    n1n1 += n1 * n1;
-    n2n2 += n2 * n2;
-    A1 += p1 * p1;
-    A2 += p2 * p2;
+    d += n1.n[i] * n2.n[i];
+    D += n1.p[i] * n2.p[i];
+    n1n1 += n1.n[i] * n1.n[i];
+    n2n2 += n2.n[i] * n2.n[i];
+    A1 += n1.p[i] * n1.p[i];
+    A2 += n2.p[i] * n2.p[i];
   }
   return decided_signs(d, D, d * d - c * c * n1n1 * n2n2, D * D + c * c * A1 * A2);
 }

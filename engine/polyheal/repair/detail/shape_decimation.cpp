@@ -818,17 +818,20 @@ const DecimationStats& ShapeDecimator::stats() const { return impl_->stats; }
 std::optional<std::size_t> round_all_if_unchanged(Mesh& mesh, LocalIndex& index,
                                                   const std::vector<vertex_descriptor>& points, double cos_cap,
                                                   double cos_needle) {
-  std::vector<std::pair<vertex_descriptor, Point>> old;  // the points moved, and where they were
+  struct Move {
+    vertex_descriptor v;
+    Point from, to;
+  };
+  std::vector<Move> moves;
   for (vertex_descriptor v : points) {
     if (mesh.is_removed(v) || mesh.is_isolated(v)) continue;
     const Point q = nearest_double_point(mesh.point(v));
-    if (q == mesh.point(v)) continue;
-    old.emplace_back(v, mesh.point(v));
+    if (q != mesh.point(v)) moves.push_back({v, mesh.point(v), q});
   }
-  if (old.empty()) return std::size_t(0);
+  if (moves.empty()) return std::size_t(0);
   std::vector<face_descriptor> around;
-  for (const auto& [v, p] : old)
-    for (face_descriptor f : CGAL::faces_around_target(mesh.halfedge(v), mesh))
+  for (const Move& m : moves)
+    for (face_descriptor f : CGAL::faces_around_target(mesh.halfedge(m.v), mesh))
       if (f != Mesh::null_face()) around.push_back(f);
   std::sort(around.begin(), around.end());
   around.erase(std::unique(around.begin(), around.end()), around.end());
@@ -839,7 +842,7 @@ std::optional<std::size_t> round_all_if_unchanged(Mesh& mesh, LocalIndex& index,
     proposed.push_back({mesh.source(h), mesh.target(h), mesh.target(mesh.next(h))});
     before.push_back({mesh.point(proposed.back()[0]), mesh.point(proposed.back()[1]), mesh.point(proposed.back()[2])});
   }
-  for (const auto& [v, p] : old) mesh.point(v) = nearest_double_point(p);
+  for (const Move& m : moves) mesh.point(m.v) = m.to;
   bool ok = true;
   for (std::size_t i = 0; ok && i < proposed.size(); ++i) {
     const Point &a = mesh.point(proposed[i][0]), &b = mesh.point(proposed[i][1]), &c = mesh.point(proposed[i][2]);
@@ -850,9 +853,9 @@ std::optional<std::size_t> round_all_if_unchanged(Mesh& mesh, LocalIndex& index,
   }
   if (ok && !index.would_intersect(proposed, around)) {
     index.update(around);
-    return old.size();
+    return moves.size();
   }
-  for (const auto& [v, p] : old) mesh.point(v) = p;
+  for (const Move& m : moves) mesh.point(m.v) = m.from;
   return std::nullopt;
 }
 
