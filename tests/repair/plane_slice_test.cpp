@@ -11,6 +11,7 @@
 #include "polyheal/inspect/local_index.h"
 #include "polyheal/io/read.h"
 #include "polyheal/mesh/convert.h"
+#include "polyheal/repair/detail/exact_meet.h"
 #include "polyheal/repair/detail/plane_slice.h"
 #include "support/builders.h"
 
@@ -209,4 +210,44 @@ TEST_CASE("plane_slice: split points lie exactly on the plane and on their paren
             CHECK(before.at(r.parents[i]).has_on(m.point(v)));
       }
     }
+}
+
+// The regularizer's triangulations decide orientations on exact rationals
+// with integers only (exact_meet.h): the same answers as CGAL's mpq
+// arithmetic on generic rationals of every sign and size, on points exactly
+// on one line (the case no filter decides: points of one segment) and on
+// points a rational hair off it.
+TEST_CASE("rational_orientation: CGAL's answers, exactly collinear points included", "[repair]") {
+  using Q = CGAL::Simple_cartesian<mpq_class>;
+  gmp_randclass random(gmp_randinit_default);
+  random.seed(7);
+  auto rational = [&](int bits) {
+    mpz_class n = random.get_z_bits(bits), d = random.get_z_bits(bits) + 1;
+    if (random.get_z_bits(1) == 1) n = -n;
+    mpq_class x(n, d);
+    x.canonicalize();
+    return x;
+  };
+  auto point = [&](int bits) { return Q::Point_2(rational(bits), rational(bits)); };
+  auto ours = [](const Q::Point_2& p, const Q::Point_2& q, const Q::Point_2& r) {
+    return detail::rational_orientation({p.x(), p.y()}, {q.x(), q.y()}, {r.x(), r.y()});
+  };
+  std::map<CGAL::Orientation, int> seen;
+  for (int bits : {3, 60, 200})
+    for (int i = 0; i < 600; ++i) {
+      const Q::Point_2 p = point(bits), q = point(bits);
+      const mpq_class t = rational(bits);
+      const Q::Point_2 on = p + t * (q - p);                 // exactly on line pq
+      const Q::Vector_2 normal(p.y() - q.y(), q.x() - p.x());  // left of p -> q
+      const mpq_class hair = mpq_class(1, mpz_class(1) << 300);
+      for (const Q::Point_2& r : {point(bits), on, on + hair * normal, on - hair * normal}) {
+        const CGAL::Orientation expected = CGAL::orientation(p, q, r);
+        REQUIRE(ours(p, q, r) == expected);
+        REQUIRE(ours(q, r, p) == expected);  // the same triangle from another corner
+        ++seen[expected];
+      }
+    }
+  CHECK(seen[CGAL::COLLINEAR] >= 1800);  // each `on` (p != q almost surely)
+  CHECK(seen[CGAL::LEFT_TURN] >= 1800);
+  CHECK(seen[CGAL::RIGHT_TURN] >= 1800);
 }

@@ -57,10 +57,52 @@ using Ends = boost::container::small_vector<Index, 2>;
 struct VertexInfo {
   std::int64_t id = -1;  // global vertex id; -1: a crossing the triangulation constructed
 };
-using Vb = CGAL::Triangulation_vertex_base_with_info_2<VertexInfo, K>;
-using Fb = CGAL::Triangulation_face_base_with_info_2<Index, K, CGAL::Constrained_triangulation_face_base_2<K>>;
+/// Epeck for the constrained triangulations, with an orientation test that
+/// decides as Epeck's does (the doubles' static filter, then intervals)
+/// and, where those fail, on the exact rationals without a gcd
+/// (detail::rational_orientation): the triangulations' exact tests (the
+/// points of one segment are exactly collinear) spent most of their time in
+/// mpq's gcds, a tenth of regularize's CPU time on a raw offset. Same
+/// answers, so the same triangulations.
+struct CdtTraits : K {
+  struct Orientation_2 {
+    using result_type = CGAL::Orientation;
+    CGAL::Orientation operator()(const K::Point_2& p, const K::Point_2& q, const K::Point_2& r) const {
+      const auto &a = p.approx(), &b = q.approx(), &c = r.approx();
+      if (a.x().is_point() && a.y().is_point() && b.x().is_point() && b.y().is_point() && c.x().is_point() &&
+          c.y().is_point())
+        return CGAL::orientation(IK::Point_2(a.x().inf(), a.y().inf()), IK::Point_2(b.x().inf(), b.y().inf()),
+                                 IK::Point_2(c.x().inf(), c.y().inf()));
+      {
+        CGAL::Protect_FPU_rounding<true> upward;
+        const CGAL::Uncertain<CGAL::Orientation> o = CGAL::orientationC2(a.x(), a.y(), b.x(), b.y(), c.x(), c.y());
+        if (CGAL::is_certain(o)) return CGAL::get_certain(o);
+      }
+      static_assert(std::is_same_v<K::Exact_kernel::FT, mpq_class>);
+      const auto &x = p.exact(), &y = q.exact(), &z = r.exact();
+      return detail::rational_orientation({x.x(), x.y()}, {y.x(), y.y()}, {z.x(), z.y()});
+    }
+  };
+  Orientation_2 orientation_2_object() const { return {}; }
+};
+
+}  // namespace
+}  // namespace polyheal
+
+/// As Epeck's: point location starts with a walk on the points' doubles.
+template <>
+struct CGAL::Triangulation_structural_filtering_traits<polyheal::CdtTraits> {
+  using Use_structural_filtering_tag = CGAL::Tag_true;
+};
+
+namespace polyheal {
+namespace {
+
+using Vb = CGAL::Triangulation_vertex_base_with_info_2<VertexInfo, CdtTraits>;
+using Fb = CGAL::Triangulation_face_base_with_info_2<Index, CdtTraits,
+                                                      CGAL::Constrained_triangulation_face_base_2<CdtTraits>>;
 using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
-using CDT = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::Exact_intersections_tag>;
+using CDT = CGAL::Constrained_Delaunay_triangulation_2<CdtTraits, Tds, CGAL::Exact_intersections_tag>;
 
 // The winding-number lines: an AABB tree of the input triangles in doubles.
 using InputTriangles = std::vector<IK::Triangle_3>;
