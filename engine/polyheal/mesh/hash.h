@@ -1,7 +1,7 @@
-// polyheal — hashing points consistently with their equality, and the flat
-// open-addressing table the welds and the distance measure look them up in
-// (no node allocation: node-based maps of a million entries were seconds of
-// a big scan's repair). No CGAL here.
+// polyheal — hashing points consistently with their equality, the flat
+// open-addressing table the welds and the distance measure look them up in,
+// and a flat map from 64-bit keys (no node allocation: node-based maps of a
+// million entries were seconds of a big scan's repair). No CGAL here.
 #pragma once
 
 #include <algorithm>
@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include "polyheal/mesh/soup.h"
@@ -56,5 +57,72 @@ std::size_t probe(const std::vector<Index>& table, std::uint64_t hash, Holds hol
   while (table[slot] != kEmptySlot && !holds(slot)) slot = (slot + 1) & mask;
   return slot;
 }
+
+}  // namespace polyheal
+
+namespace polyheal {
+
+/// A map from 64-bit keys (any but ~0) to values, flat: open addressing,
+/// linear probing, a power of two slots kept at least twice the entries,
+/// key and value side by side (a lookup is one cache line, where a
+/// node-based map chases a bucket and a node: most of the regularizer's
+/// growth was that). No erase. Growing moves the values: references
+/// returned stay valid only until the next insertion.
+template <class V>
+class KeyMap {
+ public:
+  static constexpr std::uint64_t kFree = ~std::uint64_t(0);
+
+  /// The value of `key`, nullptr when absent.
+  V* find(std::uint64_t key) {
+    if (slots_.empty()) return nullptr;
+    Slot& s = slots_[slot_of(key)];
+    return s.key == key ? &s.value : nullptr;
+  }
+  const V* find(std::uint64_t key) const { return const_cast<KeyMap*>(this)->find(key); }
+  bool contains(std::uint64_t key) const { return find(key) != nullptr; }
+
+  /// The value of `key`, value-initialised when absent.
+  V& operator[](std::uint64_t key) {
+    if (2 * (size_ + 1) > slots_.size()) grow();
+    Slot& s = slots_[slot_of(key)];
+    if (s.key != key) {
+      s.key = key;
+      ++size_;
+    }
+    return s.value;
+  }
+
+  std::size_t size() const { return size_; }
+
+ private:
+  struct Slot {
+    std::uint64_t key = kFree;
+    V value{};
+  };
+
+  /// The slot holding `key`, or the free slot where it would go.
+  std::size_t slot_of(std::uint64_t key) const {
+    std::uint64_t h = key * 0x9E3779B97F4A7C15ull;  // Fibonacci hashing: the high bits mix every key bit
+    const std::size_t mask = slots_.size() - 1;
+    std::size_t i = static_cast<std::size_t>(h >> 32 ^ h) & mask;
+    while (slots_[i].key != key && slots_[i].key != kFree) i = (i + 1) & mask;
+    return i;
+  }
+
+  void grow() {
+    std::vector<Slot> old(std::max<std::size_t>(16, 2 * slots_.size()));
+    old.swap(slots_);
+    for (Slot& s : old)
+      if (s.key != kFree) {
+        Slot& t = slots_[slot_of(s.key)];
+        t.key = s.key;
+        t.value = std::move(s.value);
+      }
+  }
+
+  std::vector<Slot> slots_;
+  std::size_t size_ = 0;
+};
 
 }  // namespace polyheal

@@ -20,7 +20,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <numeric>
 #include <optional>
 #include <unordered_map>
@@ -28,6 +27,7 @@
 #include "polyheal/io/write.h"
 #include "polyheal/mesh/convert.h"
 #include "polyheal/mesh/errors.h"
+#include "polyheal/mesh/hash.h"
 #include "polyheal/mesh/mesh.h"
 #include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/union_find.h"
@@ -155,10 +155,6 @@ EPoint exact_point(const detail::Homogeneous& h) { return detail::leaf_point<EPo
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
-
-struct XyzLess {
-  bool operator()(const EPoint& a, const EPoint& b) const { return CGAL::compare_xyz(a, b) == CGAL::SMALLER; }
-};
 
 enum State : char { kUnvisited = 0, kValid = 1, kInvalid = 2 };
 
@@ -496,9 +492,9 @@ class Regularizer {
           const Index other = around[0] == p ? around[1] : around[0];
           if (traverses(other, b, a) && pieces_[other].weight == piece.weight) next.push_back({other, piece.front});
         } else if (around.size() > 2) {
-          if (river_done_.count(undirected_edge_key(a, b))) continue;  // every piece around is classified
+          if (river_done_.contains(undirected_edge_key(a, b))) continue;  // every piece around is classified
           around_windings(p, a, b, around, piece.state == kValid, next);
-          if (!next.empty()) river_done_.insert(undirected_edge_key(a, b));
+          if (!next.empty()) river_done_[undirected_edge_key(a, b)] = 1;
         }
         if (piece.state == kValid && std::none_of(next.begin(), next.end(), [&](const auto& n) {
               return traverses(n.first, b, a) && n.second <= 0 && n.second + pieces_[n.first].weight >= 1;
@@ -534,8 +530,7 @@ class Regularizer {
     for (;;) {
       Ids out;
       Ids candidates = faces_with_edge(key);  // input faces (pieces 0..F-1), alive or not
-      if (const auto it = edges_.find(key); it != edges_.end())
-        candidates.insert(candidates.end(), it->second.begin(), it->second.end());
+      if (const Ids* more = edges_.find(key)) candidates.insert(candidates.end(), more->begin(), more->end());
       bool again = false;
       for (Index p : candidates) {
         if (!pieces_[p].alive) continue;
@@ -755,7 +750,7 @@ class Regularizer {
     for (Index m : cluster)
       for (Index u : partners_[m])
         if (root(u) != root(m)) {
-          const Ends& seg = segment(m, u);
+          const Ends seg = segment(m, u);
           if (cluster.size() > 1) plan.meets.push_back(seg);  // the cluster's own edges are constraints already
         }
     if (cluster.size() == 1) plan_segments(t, plan);
@@ -781,7 +776,7 @@ class Regularizer {
     };
     std::vector<Seg> segs;
     for (Index u : partners_[t]) {
-      const Ends& seg = segment(t, u);
+      const Ends seg = segment(t, u);
       if (seg.size() == 1) plan.lone.push_back(seg[0]);
       if (seg.size() != 2 || seg[0] == seg[1]) continue;
       Seg x{seg[0], seg[1], u, proj(points_[seg[0]], i, j), proj(points_[seg[1]], i, j), {}, {}};
@@ -998,27 +993,28 @@ class Regularizer {
 
   /// The intersection of input triangles t and u as global vertex ids (one
   /// point or a segment's two ends), constructed once per pair (§3.2).
-  const Ends& segment(Index t, Index u) {
-    const auto [it, inserted] = segments_.try_emplace(undirected_edge_key(t, u));
-    if (!inserted) return it->second;
+  Ends segment(Index t, Index u) {
+    const std::uint64_t key = undirected_edge_key(t, u);
+    if (const Ends* known = segments_.find(key)) return *known;
     ++r_.segments;
-    if (generic_segment(t, u, it->second, [this](Index p, Index q, Index w) { return edge_crossing(p, q, w); }))
-      return it->second;
-    auto tri = [&](Index f) {
-      const FaceView fv = soup_.face(f);
-      return K::Triangle_3(points_[fv[0]], points_[fv[1]], points_[fv[2]]);
-    };
-    const auto result = CGAL::intersection(tri(t), tri(u));
-    Ends& ids = it->second;
-    if (!result) return ids;
-    if (const EPoint* p = boost::get<EPoint>(&*result)) {
-      ids.push_back(vertex_id(*p));
-    } else if (const K::Segment_3* s = boost::get<K::Segment_3>(&*result)) {
-      ids.push_back(vertex_id(s->source()));
-      ids.push_back(vertex_id(s->target()));
-    } else {
-      throw UnsupportedInput(coplanar_message(t, u));
+    Ends ids;
+    if (!generic_segment(t, u, ids, [this](Index p, Index q, Index w) { return edge_crossing(p, q, w); })) {
+      auto tri = [&](Index f) {
+        const FaceView fv = soup_.face(f);
+        return K::Triangle_3(points_[fv[0]], points_[fv[1]], points_[fv[2]]);
+      };
+      const auto result = CGAL::intersection(tri(t), tri(u));
+      if (!result) {
+      } else if (const EPoint* p = boost::get<EPoint>(&*result)) {
+        ids.push_back(vertex_id(*p));
+      } else if (const K::Segment_3* s = boost::get<K::Segment_3>(&*result)) {
+        ids.push_back(vertex_id(s->source()));
+        ids.push_back(vertex_id(s->target()));
+      } else {
+        throw UnsupportedInput(coplanar_message(t, u));
+      }
     }
+    segments_[key] = ids;
     return ids;
   }
 
@@ -1195,20 +1191,61 @@ class Regularizer {
   void register_vertex(Index v) {
     if (registered_[v]) return;
     registered_[v] = 1;
-    dedup_.emplace(points_[v], v);
+    const std::uint64_t hash = value_hash(points_[v]);
+    if (known_id(points_[v], hash) == kNoPiece) remember(v, hash);
   }
 
   /// The id of exact point p: an input vertex's (if registered), or a new one.
   Index vertex_id(const EPoint& p) {
-    const auto [it, inserted] = dedup_.try_emplace(p, Index(points_.size()));
-    if (inserted) points_.push_back(p);
-    return it->second;
+    const std::uint64_t hash = value_hash(p);
+    if (const Index id = known_id(p, hash); id != kNoPiece) return id;
+    points_.push_back(p);
+    remember(Index(points_.size() - 1), hash);
+    return Index(points_.size() - 1);
+  }
+
+  /// A hash of p's exact value (equal points, equal hashes): of its
+  /// coordinates where they are doubles, else of their exact rationals
+  /// truncated to doubles. The points here are known exactly (leaves: no
+  /// evaluation) but for the few that CGAL's intersection constructed.
+  static std::uint64_t value_hash(const EPoint& p) {
+    const auto& a = p.approx();
+    Point3d key;
+    if (a.x().is_point() && a.y().is_point() && a.z().is_point()) {
+      key = {a.x().inf(), a.y().inf(), a.z().inf()};
+    } else {
+      const auto& e = p.exact();
+      key = {mpq_get_d(e.x().get_mpq_t()), mpq_get_d(e.y().get_mpq_t()), mpq_get_d(e.z().get_mpq_t())};
+    }
+    return hash_points(&key, 1);
+  }
+
+  /// The registered point equal to p (of value_hash `hash`), kNoPiece if none.
+  Index known_id(const EPoint& p, std::uint64_t hash) const {
+    const Head* head = dedup_.find(hash);
+    for (Index id = head ? head->id : kNoPiece; id != kNoPiece; id = same_hash_[id])
+      if (points_[id] == p) return id;
+    return kNoPiece;
+  }
+
+  /// Registers point `id` (equal to none registered; of value_hash `hash`).
+  void remember(Index id, std::uint64_t hash) {
+    if (same_hash_.size() <= id) same_hash_.resize(std::max<std::size_t>(id + 1, 2 * same_hash_.size()), kNoPiece);
+    Head& head = dedup_[hash];
+    same_hash_[id] = head.id;
+    head.id = id;
   }
 
   const Soup& soup_;
   RegularizeReport& r_;
   std::vector<EPoint> points_;  // input vertices, then points on intersection curves
-  std::map<EPoint, Index, XyzLess> dedup_;
+  /// Registered points by value_hash: the last registered, then each the
+  /// one before (same_hash_, by point id); equal points are one.
+  struct Head {
+    Index id = kNoPiece;
+  };
+  KeyMap<Head> dedup_;
+  std::vector<Index> same_hash_;
   std::vector<std::vector<Index>> partners_;  // per input face: the faces it intersects
   std::vector<char> split_, closed_, registered_;
   std::vector<std::vector<Index>> subs_;  // per input face: its sub-triangles
@@ -1216,9 +1253,9 @@ class Regularizer {
   std::vector<Plan> plans_;
   std::vector<Triangulated> triangulated_;  // until committed (with its plan)
   std::vector<Piece> pieces_;             // input faces (ids 0..F-1), then sub-triangles
-  std::unordered_map<std::uint64_t, Ids> edges_;                      // sub-triangles by edge
+  KeyMap<Ids> edges_;                                                 // sub-triangles by edge
   std::vector<std::pair<std::uint64_t, Index>> face_edges_;           // (edge, input face), sorted
-  std::unordered_map<std::uint64_t, Ends> segments_;                  // by face pair
+  KeyMap<Ends> segments_;                                             // by face pair
   struct PairHash {
     std::size_t operator()(const std::pair<std::uint64_t, Index>& k) const {
       return std::hash<std::uint64_t>()(k.first * 0x9E3779B97F4A7C15ull ^ k.second);
@@ -1233,7 +1270,7 @@ class Regularizer {
     }
   };
   std::unordered_map<std::array<Index, 3>, Index, TripleHash> triples_;  // crossing of two segments on a face
-  std::unordered_set<std::uint64_t> river_done_;  // intersection-curve edges whose pieces are all classified
+  KeyMap<char> river_done_;  // intersection-curve edges whose pieces are all classified (1)
   std::vector<char> zero_area_;                                         // per input face (§3.1)
   UnionFind cluster_;                                                   // over coplanar overlaps
   std::unordered_map<Index, std::vector<Index>> members_;              // cluster root -> its faces (2 or more)
