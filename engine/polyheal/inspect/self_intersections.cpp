@@ -298,6 +298,22 @@ void scan(const Soup& s, const SelfIntersectionOptions& o, Found found, const st
     std::vector<const Box*> flagged;
     for (const Box* b : pointers)
       if ((*o.only)[tris[b->info()].face]) flagged.push_back(b);
+    // Flagged faces a large part of the soup (regularize's rounding check:
+    // every face with a corner on an intersection curve, half the output):
+    // one self scan of all the boxes, the pairs without a flagged face
+    // dropped before the exact test, costs less than pairing the flagged
+    // boxes with the rest (Hand1's raw offset: 91k of 168k faces, 0.23 ->
+    // 0.17 s). The same pairs either way.
+    if (4 * flagged.size() > pointers.size()) {
+      auto flagged_face = [&](const Box* b) { return (*o.only)[tris[b->info()].face] != 0; };
+      box_pairs(
+          pointers,
+          [&](const Box* x, const Box* y) {
+            if (flagged_face(x) || flagged_face(y)) callback(x, y);
+          },
+          o.parallel ? 2 : 0);
+      return;
+    }
     flagged_pairs(
         flagged, pointers,
         [&](const Box* x, const Box* y) {
