@@ -262,6 +262,7 @@ class Regularizer {
   Soup output(std::vector<std::size_t>& source, std::vector<char>& made) const {
     Soup out;
     std::vector<std::int64_t> id(points_.size(), -1);
+    std::vector<std::pair<Index, Index>> fresh;  // (output point, new point) to round
     for (const Piece& p : pieces_) {
       if (!p.alive || p.state != kValid) continue;
       std::array<Index, 3> f;
@@ -270,7 +271,8 @@ class Regularizer {
         if (i < 0) {
           i = std::int64_t(out.points.size());
           const bool input_vertex = p.v[k] < soup_.points.size();
-          out.points.push_back(input_vertex ? soup_.points[p.v[k]] : nearest_point3d(points_[p.v[k]]));
+          out.points.push_back(input_vertex ? soup_.points[p.v[k]] : Point3d{});
+          if (!input_vertex) fresh.push_back({Index(i), p.v[k]});
           made.push_back(input_vertex ? 0 : 1);
         }
         f[k] = Index(i);
@@ -278,6 +280,9 @@ class Regularizer {
       out.add_triangle(f[0], f[1], f[2]);
       source.push_back(p.source);
     }
+    // each an exact rounding (a rational's division): in parallel
+    tbb::parallel_for(std::size_t(0), fresh.size(),
+                      [&](std::size_t n) { out.points[fresh[n].first] = nearest_point3d(points_[fresh[n].second]); });
     return out;
   }
 
