@@ -1402,7 +1402,7 @@ void split_pinches(const Soup& input, bool input_manifold, RegularizeResult& res
       uses.push_back({v, s.face(f)[(k + 1) % 3], Index(f)});
       uses.push_back({v, s.face(f)[(k + 2) % 3], Index(f)});
     }
-  std::sort(uses.begin(), uses.end());
+  tbb::parallel_sort(uses.begin(), uses.end());  // (equal entries are identical: any order is the one order)
   // cones as sets of (vertex, face) corners: index 3f + corner
   UnionFind cone(3 * F);
   auto corner = [&](Index f, Index v) {
