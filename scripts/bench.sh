@@ -405,13 +405,14 @@ if want repair; then
 fi
 median() { sort -g | awk '{a[NR] = $1} END { if (NR == 0) print "-"; else if (NR % 2) printf "%.3g%%", 100 * a[(NR + 1) / 2]; else printf "%.3g%%", 100 * (a[NR / 2] + a[NR / 2 + 1]) / 2 }'; }
 
-run_line="Run: $(date -u +%Y-%m-%d), polyheal $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown), Release build."
+machine="$(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores, $(free -g | awk '/Mem:/{print $2}') GiB"
+# each section names its machine: sections kept from earlier runs may come from another
+run_line="Run: $(date -u +%Y-%m-%d), polyheal $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown), Release build, $machine."
 # old_section HEADING: that section of the current BENCHMARKS.md, as it stands (a section not rerun)
 old_section() {
   [ -f "$root/BENCHMARKS.md" ] || return 0
   awk -v h="$1" 'index($0, h) == 1 {on = 1; print; next} on && (/^## / || /^## Notes/) {exit} on {print}' "$root/BENCHMARKS.md"
 }
-machine="$(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores, $(free -g | awk '/Mem:/{print $2}') GiB"
 {
   cat <<HEAD
 # Benchmarks
@@ -420,7 +421,8 @@ Produced by \`scripts/bench.sh\` (wall time of the whole process, peak resident
 memory from \`/usr/bin/time\`). Do not edit by hand. \`BENCH_ONLY=section,...\` reruns
 some sections and keeps the others; each section names its own run.
 
-- Machine: $machine
+- Machine: each section's Run line names it (this run's: $machine; a Run line without one is
+  older than this field and its machine is not recorded; compare runs only within a section).
 - Peers: CGAL $(dpkg-query -W -f='${Version}' libcgal-dev) (Debian), one peer per section, same machine, same run.
 
 HEAD
