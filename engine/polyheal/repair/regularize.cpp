@@ -1008,15 +1008,15 @@ class Regularizer {
         const FaceView fv = soup_.face(f);
         return K::Triangle_3(points_[fv[0]], points_[fv[1]], points_[fv[2]]);
       };
-      const auto result = CGAL::intersection(tri(t), tri(u));
-      if (!result) {
-      } else if (const EPoint* p = boost::get<EPoint>(&*result)) {
-        ids.push_back(vertex_id(*p));
-      } else if (const K::Segment_3* s = boost::get<K::Segment_3>(&*result)) {
-        ids.push_back(vertex_id(s->source()));
-        ids.push_back(vertex_id(s->target()));
-      } else {
-        throw UnsupportedInput(coplanar_message(t, u));
+      if (const auto result = CGAL::intersection(tri(t), tri(u))) {
+        if (const EPoint* p = boost::get<EPoint>(&*result)) {
+          ids.push_back(vertex_id(*p));
+        } else if (const K::Segment_3* s = boost::get<K::Segment_3>(&*result)) {
+          ids.push_back(vertex_id(s->source()));
+          ids.push_back(vertex_id(s->target()));
+        } else {
+          throw UnsupportedInput(coplanar_message(t, u));
+        }
       }
     }
     segments_[key] = ids;
