@@ -157,6 +157,12 @@ Shape classify_with(const P& a, const P& b, const P& c, Collinear collinear, Gre
   return Shape::fine;
 }
 
+/// The doubles of a point that is_double_point() holds for.
+Point3d doubles_of(const Point& p) {
+  const auto q = to_input_point(p);
+  return {q.x(), q.y(), q.z()};
+}
+
 }  // namespace
 
 double cos_degrees(double degrees) { return std::cos(degrees * 3.14159265358979323846 / 180.0); }
@@ -171,8 +177,7 @@ Shape classify_triangle(const Point3d& a, const Point3d& b, const Point3d& c, do
 
 Shape classify_triangle(const Point& a, const Point& b, const Point& c, double cos_cap, double cos_needle) {
   if (is_double_point(a) && is_double_point(b) && is_double_point(c)) {  // the cheaper exact path
-    auto d = [](const Point& p) { const auto q = to_input_point(p); return Point3d{q.x(), q.y(), q.z()}; };
-    return classify_triangle(d(a), d(b), d(c), cos_cap, cos_needle);
+    return classify_triangle(doubles_of(a), doubles_of(b), doubles_of(c), cos_cap, cos_needle);
   }
   using FT = Kernel::FT;
   auto sub = [](const Point& x, const Point& y) { return Vec<FT>{x.x() - y.x(), x.y() - y.y(), x.z() - y.z()}; };
@@ -250,8 +255,9 @@ int static_normals_sign(const std::array<Point3d, 6>& p) {
 bool normals_agree(const Point& a, const Point& b, const Point& c, const Point& d, const Point& e, const Point& f) {
   if (is_double_point(a) && is_double_point(b) && is_double_point(c) && is_double_point(d) && is_double_point(e) &&
       is_double_point(f)) {
-    auto at = [](const Point& x) { const auto q = to_input_point(x); return Point3d{q.x(), q.y(), q.z()}; };
-    if (const int sign = static_normals_sign({at(a), at(b), at(c), at(d), at(e), at(f)}); sign != 0) return sign > 0;
+    const int sign = static_normals_sign(
+        {doubles_of(a), doubles_of(b), doubles_of(c), doubles_of(d), doubles_of(e), doubles_of(f)});
+    if (sign != 0) return sign > 0;
   }
   {
     CGAL::Protect_FPU_rounding<true> protect;

@@ -58,10 +58,6 @@ std::size_t probe(const std::vector<Index>& table, std::uint64_t hash, Holds hol
   return slot;
 }
 
-}  // namespace polyheal
-
-namespace polyheal {
-
 /// A map from 64-bit keys (any but ~0) to values, flat: open addressing,
 /// linear probing, a power of two slots kept at least twice the entries,
 /// key and value side by side (a lookup is one cache line, where a

@@ -150,8 +150,9 @@ bool round_if_unchanged(Mesh& mesh, LocalIndex& index, vertex_descriptor v, doub
 /// round_if_unchanged() for all of `points` at once: every one that is not
 /// a double point moves to its nearest doubles, and the faces round them are
 /// checked once, together, the same way (each against its shape with all
-/// its corners as they were; round_if_unchanged is this for one point). Returns how many moved, or nothing (and
-/// nothing moved) when a check fails: then round them one by one. Checked
+/// its corners as they were; round_if_unchanged is this for one point).
+/// Returns how many moved, or nothing (and nothing moved) when a check
+/// fails: then round them one by one. Checked
 /// together, a slice's faces are pairs of double triangles; one by one, a
 /// point's neighbours along the slice are still rational (exact tests on
 /// rationals where CAD faces are coplanar).
