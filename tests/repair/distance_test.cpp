@@ -305,6 +305,29 @@ TEST_CASE("distance: faces in both soups count once per copy", "[repair][distanc
   CHECK(d[1] <= 1.0 + 1e-12);
 }
 
+TEST_CASE("distance: Hausdorff with a bound on one direction measures it only when the bound can matter",
+          "[repair][distance]") {
+  // a: a unit triangle and a second one 2 above it; b: the first, and a
+  // triangle standing on its edge with its apex 1 from it. a -> b is
+  // sqrt 2 (the lifted triangle's corner above (0, 1)), b -> a 1 (the apex).
+  const Soup a = test::soup({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 2}, {1, 0, 2}, {0, 1, 2}}, {{0, 1, 2}, {3, 4, 5}});
+  const Soup b = test::soup({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{0, 1, 2}, {0, 1, 3}});
+  const double error = 1e-6;
+  const std::array<double, 2> d = detail::one_sided_distances(a, b, error);
+  REQUIRE(d[0] > 1.4);
+  REQUIRE(d[1] >= 1.0 - error);
+  const double full = detail::hausdorff_distance(a, b, error);
+  // b -> a at most 1 (true) or 1.2: below a -> b, the same answer unmeasured
+  CHECK(detail::hausdorff_distance(a, b, error, 1.0) == full);
+  CHECK(detail::hausdorff_distance(a, b, error, 1.2) == full);
+  // the other way round b -> a is the larger direction: a bound above what
+  // a -> b measures (its own distance, 1) makes it measured
+  const double back = detail::hausdorff_distance(b, a, error);
+  REQUIRE(back > 1.4);
+  CHECK(detail::hausdorff_distance(b, a, error, 3.0) == back);
+  CHECK(detail::hausdorff_distance(b, a, error, HUGE_VAL) == back);
+}
+
 TEST_CASE("distance: Hausdorff of a removed interior finds its deepest point", "[repair][distance]") {
   // A sphere of radius 1 with a second one of radius 0.5 inside it, against
   // the outer sphere alone: what a union leaves out, 0.5 deep. One vertex

@@ -1125,22 +1125,38 @@ double measured(const std::vector<Corners>& from, const std::vector<Corners>& to
   std::vector<Corners> near;
   return one_sided(from, SurfaceDistance(reachable(to, from, near) ? near : to), error_bound, skip);
 }
+
+/// Two soups' triangles, and those of each that the other lacks. A triangle
+/// present in both soups is at distance 0 from the other, so each direction
+/// needs only the triangles the other soup lacks: a repair that changed
+/// little is measured in time proportional to what it changed.
+struct Differing {
+  std::vector<Corners> ta, tb, only_a, only_b;
+  Differing(const Soup& a, const Soup& b) : ta(triangles_of(a)), tb(triangles_of(b)) {
+    differences(ta, tb, &only_a, &only_b);
+  }
+  /// One soup is empty and the other is not.
+  bool unmeasurable() const { return (ta.empty() && !only_b.empty()) || (tb.empty() && !only_a.empty()); }
+};
 }  // namespace
 
 std::array<double, 2> one_sided_distances(const Soup& a, const Soup& b, double error_bound) {
-  // A triangle present in both soups is at distance 0 from the other, so
-  // each direction needs only the triangles the other soup lacks: a repair
-  // that changed little is measured in time proportional to what it changed.
-  const std::vector<Corners> ta = triangles_of(a), tb = triangles_of(b);
-  std::vector<Corners> only_a, only_b;
-  differences(ta, tb, &only_a, &only_b);
-  if ((ta.empty() && !only_b.empty()) || (tb.empty() && !only_a.empty())) return {-1.0, -1.0};
+  const Differing d(a, b);
+  if (d.unmeasurable()) return {-1.0, -1.0};
   // The two directions are independent (each builds its own tree): one per
   // core, deterministic whatever the scheduling.
   double ab = 0.0, ba = 0.0;
-  tbb::parallel_invoke([&] { ab = measured(only_a, tb, error_bound); },
-                       [&] { ba = measured(only_b, ta, error_bound); });
+  tbb::parallel_invoke([&] { ab = measured(d.only_a, d.tb, error_bound); },
+                       [&] { ba = measured(d.only_b, d.ta, error_bound); });
   return {ab, ba};
+}
+
+double hausdorff_distance(const Soup& a, const Soup& b, double error_bound, double b_to_a_at_most) {
+  const Differing d(a, b);
+  if (d.unmeasurable()) return -1.0;
+  const double ab = measured(d.only_a, d.tb, error_bound);
+  // b -> a lies in [0, b_to_a_at_most]: at most ab, it changes nothing
+  return b_to_a_at_most <= ab ? ab : std::max(ab, measured(d.only_b, d.ta, error_bound));
 }
 
 namespace {

@@ -105,6 +105,14 @@ double squared_distance_to_triangle(const Point3d& p, const Point3d& a, const Po
 /// empty and the other is not (not measured).
 double hausdorff_distance(const Soup& a, const Soup& b, double error_bound);
 
+/// hausdorff_distance() given `b_to_a_at_most`, a rigorous upper bound on
+/// the distance from b to a (each triangle of b bounded against a triangle
+/// of a, say): b -> a is measured only when that bound exceeds the a -> b
+/// distance measured first. The same result and error bound: a one-sided
+/// distance known to be at most the other one changes neither. (The
+/// directions run one after the other, not side by side.)
+double hausdorff_distance(const Soup& a, const Soup& b, double error_bound, double b_to_a_at_most);
+
 /// The two one-sided distances of hausdorff_distance: {from a to b, from b
 /// to a} (how far a point of a can be from b, and the other way round).
 std::array<double, 2> one_sided_distances(const Soup& a, const Soup& b, double error_bound);
