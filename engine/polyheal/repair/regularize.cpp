@@ -174,8 +174,9 @@ struct Piece {
   /// Across edge (v[e], v[e + 1]): the other piece, when the edge is inside
   /// one sub-triangulation and unconstrained (no other piece can have it:
   /// an edge another triangle shares lies on their intersection segment, a
-  /// constraint, or on the triangle's own side); kNoPiece otherwise, and
-  /// the edge is looked up among all pieces.
+  /// constraint, or on the triangle's own side), or joins two input
+  /// triangles that touch nothing else (link_untouched_edges()); kNoPiece
+  /// otherwise, and the edge is looked up among all pieces.
   std::array<Index, 3> across{kNoPiece, kNoPiece, kNoPiece};
 };
 
@@ -229,6 +230,7 @@ class Regularizer {
       for (int e = 0; e < 3; ++e) face_edges_.push_back({undirected_edge_key(fv[e], fv[(e + 1) % 3]), Index(f)});
     }
     tbb::parallel_sort(face_edges_.begin(), face_edges_.end());
+    link_untouched_edges();
     for (int k = 0; k < 3; ++k) below_[k] = report.bbox_min[k] - (1.0 + std::abs(report.bbox_min[k]));
   }
 
@@ -341,6 +343,37 @@ class Regularizer {
   Ids cluster_of(Index f) {
     const auto it = members_.find(root(f));
     return it == members_.end() ? Ids{f} : Ids(it->second.begin(), it->second.end());
+  }
+
+  /// An edge of exactly two input triangles, neither intersecting another
+  /// nor zero-area, is an edge of those two pieces only: a piece joins two
+  /// input vertices only where one triangle (or one plane's cluster of
+  /// overlapping ones) has both as corners, and a triangle with both has
+  /// the edge. Their `across` is set, and the growth crosses such an edge
+  /// without looking it up (most of the surface, usually). The input
+  /// triangles of every other edge start its list in the edge lookup
+  /// (by index; sub-triangles follow).
+  void link_untouched_edges() {
+    auto untouched = [&](Index f) { return partners_[f].empty() && !zero_area_[f]; };
+    auto link = [&](Index f, std::uint64_t key, Index g) {
+      const FaceView fv = soup_.face(f);
+      for (int e = 0; e < 3; ++e)
+        if (undirected_edge_key(fv[e], fv[(e + 1) % 3]) == key) pieces_[f].across[e] = g;
+    };
+    for (std::size_t k = 0; k < face_edges_.size();) {
+      const std::uint64_t key = face_edges_[k].first;
+      std::size_t m = k + 1;
+      while (m < face_edges_.size() && face_edges_[m].first == key) ++m;
+      const Index f = face_edges_[k].second, g = face_edges_[k + 1 < m ? k + 1 : k].second;
+      if (m - k == 2 && f != g && untouched(f) && untouched(g)) {
+        link(f, key, g);
+        link(g, key, f);
+      } else {
+        Ids& list = edges_[key];
+        for (std::size_t i = k; i < m; ++i) list.push_back(face_edges_[i].second);
+      }
+      k = m;
+    }
   }
 
   // ---- seeds (§3.3, generalised) -----------------------------------------
@@ -536,8 +569,8 @@ class Regularizer {
     const std::uint64_t key = undirected_edge_key(a, b);
     for (;;) {
       Ids out;
-      Ids candidates = faces_with_edge(key);  // input faces (pieces 0..F-1), alive or not
-      if (const Ids* more = edges_.find(key)) candidates.insert(candidates.end(), more->begin(), more->end());
+      const Ids* found = edges_.find(key);  // input faces (pieces 0..F-1, alive or not), then sub-triangles
+      const Ids candidates = found ? *found : Ids{};
       bool again = false;
       for (Index p : candidates) {
         if (!pieces_[p].alive) continue;
@@ -991,10 +1024,13 @@ class Regularizer {
   }
 
   /// The input faces with an edge `key` (sorted list lookup).
+  /// The input faces with edge `key`, one that is not linked (see
+  /// link_untouched_edges()).
   Ids faces_with_edge(std::uint64_t key) const {
     Ids out;
-    auto it = std::lower_bound(face_edges_.begin(), face_edges_.end(), std::make_pair(key, Index(0)));
-    for (; it != face_edges_.end() && it->first == key; ++it) out.push_back(it->second);
+    if (const Ids* found = edges_.find(key))
+      for (Index p : *found)
+        if (p < soup_.face_count()) out.push_back(p);
     return out;
   }
 
@@ -1260,7 +1296,7 @@ class Regularizer {
   std::vector<Plan> plans_;
   std::vector<Triangulated> triangulated_;  // until committed (with its plan)
   std::vector<Piece> pieces_;             // input faces (ids 0..F-1), then sub-triangles
-  KeyMap<Ids> edges_;                                                 // sub-triangles by edge
+  KeyMap<Ids> edges_;  // pieces by edge: input faces (but two untouched ones), then sub-triangles
   std::vector<std::pair<std::uint64_t, Index>> face_edges_;           // (edge, input face), sorted
   KeyMap<Ends> segments_;                                             // by face pair
   struct PairHash {
