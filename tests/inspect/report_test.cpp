@@ -443,6 +443,23 @@ TEST_CASE("nesting: inside-out components are those with negative volume inside 
     CHECK(r.cavities == 1);
     CHECK(turned_by_part(nesting(s), {0, 12}) == std::vector<int>{0, 0});
   }
+  SECTION("decided beside the self-intersection pass, kept only where that certifies the surface") {
+    // in parallel the nesting is decided before the intersections are known
+    for (const bool parallel : {true, false}) {
+      InspectOptions o;
+      o.parallel = parallel;
+      const Report cavity = inspect(test::concat(outer, reversed(inner)), o);
+      CHECK(cavity.nesting_checked);
+      CHECK(cavity.cavities == 1);
+      // the inner box reaching through the outer one's wall
+      const Soup through = test::concat(outer, reversed(test::box({1, 1, 1}, {2, 2, 4})));
+      const Report crossing = inspect(through, o);
+      CHECK_FALSE(crossing.self_intersections.empty());
+      CHECK(crossing.inward_components == 1);
+      CHECK_FALSE(crossing.nesting_checked);
+      CHECK(crossing.cavities == 0);
+    }
+  }
   SECTION("a hollow box inside out: both shells turn, the cavity comes back") {
     const Soup s = test::concat(reversed(outer), inner);
     const Nesting n = nesting(s);

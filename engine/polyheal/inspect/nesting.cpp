@@ -12,6 +12,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <set>
 #include <unordered_map>
 
@@ -50,19 +51,12 @@ struct Box {
 class Components {
  public:
   explicit Components(const Soup& soup)
-      : welded_(apply_weld(soup, weld_identical_points(soup.points))), topology_(analyze_topology(welded_)) {
-    faces_.resize(count());
-    for (std::size_t f = 0; f < welded_.face_count(); ++f) faces_[topology_.face_component[f]].push_back(f);
-    box_.resize(count());
-    for (std::size_t c = 0; c < count(); ++c)
-      for (std::size_t f : faces_[c])
-        for (Index i : welded_.face(f))
-          for (int k = 0; k < 3; ++k) {
-            box_[c].lo[k] = std::min(box_[c].lo[k], welded_.points[i][k]);
-            box_[c].hi[k] = std::max(box_[c].hi[k], welded_.points[i][k]);
-          }
-    solids_.resize(count());
+      : own_soup_(apply_weld(soup, weld_identical_points(soup.points))), own_topology_(analyze_topology(*own_soup_)),
+        welded_(*own_soup_), topology_(*own_topology_) {
+    index();
   }
+  /// `welded` has no two identical points; `topology` is its analysis.
+  Components(const Soup& welded, const Topology& topology) : welded_(welded), topology_(topology) { index(); }
   std::size_t count() const { return topology_.components; }
   const Soup& welded() const { return welded_; }
   const Topology& topology() const { return topology_; }
@@ -112,8 +106,24 @@ class Components {
     return s;
   }
 
-  Soup welded_;
-  Topology topology_;
+  void index() {
+    faces_.resize(count());
+    for (std::size_t f = 0; f < welded_.face_count(); ++f) faces_[topology_.face_component[f]].push_back(f);
+    box_.resize(count());
+    for (std::size_t c = 0; c < count(); ++c)
+      for (std::size_t f : faces_[c])
+        for (Index i : welded_.face(f))
+          for (int k = 0; k < 3; ++k) {
+            box_[c].lo[k] = std::min(box_[c].lo[k], welded_.points[i][k]);
+            box_[c].hi[k] = std::max(box_[c].hi[k], welded_.points[i][k]);
+          }
+    solids_.resize(count());
+  }
+
+  std::optional<Soup> own_soup_;
+  std::optional<Topology> own_topology_;
+  const Soup& welded_;
+  const Topology& topology_;
   std::vector<std::vector<std::size_t>> faces_;
   std::vector<Box> box_;
   std::vector<Solid> solids_;
@@ -121,9 +131,9 @@ class Components {
 
 }  // namespace
 
-Nesting nesting(const Soup& soup, bool crossing) {
+namespace {
+Nesting nesting_of(Components& parts, bool crossing) {
   Nesting n;
-  Components parts(soup);
   const Soup& welded = parts.welded();
   n.components = parts.count();
   n.face_component = parts.topology().face_component;
@@ -207,6 +217,18 @@ Nesting nesting(const Soup& soup, bool crossing) {
     n.turned[c] = (n.volume_sign[c] > 0) != (depth % 2 == 0);
   }
   return n;
+}
+
+}  // namespace
+
+Nesting nesting(const Soup& soup, bool crossing) {
+  Components parts(soup);
+  return nesting_of(parts, crossing);
+}
+
+Nesting nesting_of_welded(const Soup& welded, const Topology& topology) {
+  Components parts(welded, topology);
+  return nesting_of(parts, false);
 }
 
 std::vector<Interpenetration> interpenetrations(const Soup& soup, const std::vector<FacePair>& pairs) {

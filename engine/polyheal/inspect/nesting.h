@@ -17,6 +17,7 @@
 
 #include "polyheal/inspect/self_intersections.h"
 #include "polyheal/mesh/soup.h"
+#include "polyheal/mesh/topology.h"
 
 namespace polyheal {
 
@@ -52,6 +53,10 @@ struct Nesting {
 /// its union with them taken, where a cavity that breaks through a wall
 /// stays one (the union then opens it).
 Nesting nesting(const Soup& soup, bool crossing = false);
+
+/// nesting(welded) for a soup without two identical points, given its
+/// analyze_topology() (the inspection has both).
+Nesting nesting_of_welded(const Soup& welded, const Topology& topology);
 
 /// For a closed, manifold, oriented surface whose components cross one
 /// another (`pairs`: its intersecting face pairs, indices into `soup`): per

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <set>
 
 #include "polyheal/inspect/detail/parallel.h"
@@ -29,7 +30,7 @@ EdgeRef ref(const Edge& e) {
   return r;
 }
 
-void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions& o, Report& r);
+void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions& o, Report& r, Topology& topo);
 void count_cracks(const Soup& soup, const InspectOptions& o, Report& r);
 
 }  // namespace
@@ -65,7 +66,18 @@ Report inspect(const Soup& input, const InspectOptions& o) {
         o.self_intersections && !weld.merged ? *o.self_intersections : find_self_intersections(soup, si);
     r.seconds_self_intersections = seconds_since(t);
   };
-  auto topology_and_shape_pass = [&] { topology_and_shape(soup, weld, o, r); };
+  // Nesting (inward components only) needs a certified surface; in
+  // parallel it is decided beside the self-intersection pass, before that
+  // pass has certified anything, and kept only if it does (its serial
+  // tree building was most of a cavity-rich surface's last stretch).
+  Topology topo;
+  std::optional<Nesting> nested;
+  auto topology_and_shape_pass = [&] {
+    topology_and_shape(soup, weld, o, r, topo);
+    const bool clean_but_crossings = r.faces > 0 && r.closed && r.manifold && r.oriented &&
+                                     r.degenerate_faces.empty() && r.duplicate_faces.empty();
+    if (o.parallel && r.inward_components > 0 && clean_but_crossings) nested = nesting_of_welded(soup, topo);
+  };
   if (o.parallel) tbb::parallel_invoke(self_intersection_pass, topology_and_shape_pass);
   else {
     topology_and_shape_pass();
@@ -73,10 +85,10 @@ Report inspect(const Soup& input, const InspectOptions& o) {
   }
   count_cracks(soup, o, r);
   if (r.inward_components > 0 && r.certified_clean()) {
-    const Nesting n = nesting(soup);
+    if (!nested) nested = nesting_of_welded(soup, topo);
     r.nesting_checked = true;
-    r.inside_out_components = n.inside_out_count;
-    r.cavities = n.cavity_count;
+    r.inside_out_components = nested->inside_out_count;
+    r.cavities = nested->cavity_count;
   }
   return r;
 }
@@ -109,9 +121,9 @@ void count_cracks(const Soup& soup, const InspectOptions& o, Report& r) {
   }
 }
 
-void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions& o, Report& r) {
+void topology_and_shape(const Soup& soup, const Weld& weld, const InspectOptions& o, Report& r, Topology& topo) {
   auto t0 = std::chrono::steady_clock::now();
-  const Topology topo = analyze_topology(soup);
+  topo = analyze_topology(soup);
   r.components = topo.components;
   r.isolated_vertices = topo.isolated_vertices - weld.merged;  // welded-away twins are not isolated points
   for (const Edge& e : topo.boundary_edges) r.boundary_edges.push_back(ref(e));
