@@ -1213,22 +1213,34 @@ class Regularizer {
                 names.end());
     known_crossings_.resize(names.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, names.size()), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t k = r.begin(); k != r.end(); ++k)
-        known_crossings_[k] = {names[k].key, crossing_point(names[k].p, names[k].q, names[k].key.second)};
+      for (std::size_t k = r.begin(); k != r.end(); ++k) {
+        KnownCrossing& c = known_crossings_[k];
+        c.name = names[k].key;
+        c.point = crossing_point(names[k].p, names[k].q, names[k].key.second);
+        c.hash = value_hash(c.point);
+      }
     });
   }
 
   /// The point where edge pq crosses the plane of input face w (exact), by
   /// name: computed once per (edge, face).
   Index edge_crossing(Index p, Index q, Index w) {
-    const auto [it, inserted] = crossings_.try_emplace({undirected_edge_key(p, q), w}, Index(0));
-    if (!inserted) return it->second;
-    const auto known = std::lower_bound(known_crossings_.begin(), known_crossings_.end(), it->first,
-                                        [](const auto& x, const auto& key) { return x.first < key; });
-    it->second = vertex_id(known != known_crossings_.end() && known->first == it->first ? known->second
-                                                                                          : crossing_point(p, q, w));
-    on_edge_[undirected_edge_key(p, q)].push_back(it->second);
-    return it->second;
+    const std::pair<std::uint64_t, Index> name{undirected_edge_key(p, q), w};
+    const auto known = std::lower_bound(known_crossings_.begin(), known_crossings_.end(), name,
+                                        [](const KnownCrossing& x, const auto& key) { return x.name < key; });
+    Index* id = nullptr;
+    if (known != known_crossings_.end() && known->name == name) {
+      id = &known->id;
+      if (*id == kNoPiece) *id = vertex_id(known->point, known->hash);
+      else return *id;
+    } else {  // (not met by precompute_crossings(): cannot happen)
+      const auto [it, inserted] = crossings_.try_emplace(name, Index(0));
+      if (!inserted) return it->second;
+      id = &it->second;
+      *id = vertex_id(crossing_point(p, q, w));
+    }
+    on_edge_[name.first].push_back(*id);
+    return *id;
   }
 
   void register_vertex(Index v) {
@@ -1239,8 +1251,8 @@ class Regularizer {
   }
 
   /// The id of exact point p: an input vertex's (if registered), or a new one.
-  Index vertex_id(const EPoint& p) {
-    const std::uint64_t hash = value_hash(p);
+  Index vertex_id(const EPoint& p) { return vertex_id(p, value_hash(p)); }
+  Index vertex_id(const EPoint& p, std::uint64_t hash) {
     if (const Index id = known_id(p, hash); id != kNoPiece) return id;
     points_.push_back(p);
     remember(Index(points_.size() - 1), hash);
@@ -1306,7 +1318,15 @@ class Regularizer {
   };
   std::unordered_map<std::pair<std::uint64_t, Index>, Index, PairHash> crossings_;  // (edge, face) -> point
   std::unordered_map<std::uint64_t, std::vector<Index>> on_edge_;                   // input edge -> its crossings
-  std::vector<std::pair<std::pair<std::uint64_t, Index>, EPoint>> known_crossings_;  // by name, sorted (planning only)
+  /// A crossing precompute_crossings() found: its name (edge, face), point,
+  /// value_hash, and id once planning handed one out.
+  struct KnownCrossing {
+    std::pair<std::uint64_t, Index> name;
+    EPoint point;
+    std::uint64_t hash = 0;
+    Index id = kNoPiece;
+  };
+  std::vector<KnownCrossing> known_crossings_;  // by name, sorted (planning only)
   struct TripleHash {
     std::size_t operator()(const std::array<Index, 3>& k) const {
       return std::hash<std::uint64_t>()((std::uint64_t(k[0]) << 42) ^ (std::uint64_t(k[1]) << 21) ^ k[2]);
