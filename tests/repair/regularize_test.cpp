@@ -10,6 +10,8 @@
 #include <set>
 #include <vector>
 
+#include <tbb/global_control.h>
+
 #include "polyheal/inspect/report.h"
 #include "polyheal/io/read.h"
 #include "polyheal/io/write.h"
@@ -164,6 +166,25 @@ TEST_CASE("regularize: self-overlapping and overlapping closed meshes come out c
     CHECK(rep.signed_volume <= inspect(in).signed_volume + 1e-9);
     CHECK(r.report.partially_valid > 0);
     CHECK(test::tetgen_meshes(path, std::string("regularize_out_") + name));
+  }
+}
+
+TEST_CASE("regularize: the output does not depend on the number of threads") {
+  // Triangulations run on other threads while planning goes on, each once
+  // what it reads is final; on one thread all of them run after planning.
+  for (const char* name : {"knot_tube_r1.2.off", "bones.off"}) {
+    INFO(name);
+    const Soup in = read_soup(test::fixture(name));
+    const RegularizeResult parallel = regularize(in);
+    RegularizeResult serial;
+    {
+      tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+      serial = regularize(in);
+    }
+    REQUIRE(parallel.report.triangles_split > 0);
+    CHECK(parallel.soup.points == serial.soup.points);
+    CHECK(parallel.soup.indices == serial.soup.indices);
+    CHECK(parallel.source_face == serial.source_face);
   }
 }
 

@@ -15,6 +15,8 @@
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
+#include <tbb/concurrent_vector.h>
+#include <tbb/task_group.h>
 #include <boost/container/small_vector.hpp>
 
 #include <algorithm>
@@ -189,7 +191,7 @@ class Regularizer {
  public:
   Regularizer(const Soup& soup, const std::vector<FacePair>& pairs, const Report& report, RegularizeReport& r)
       : soup_(soup), r_(r), partners_(soup.face_count()), split_(soup.face_count(), 0),
-        closed_(soup.face_count(), 0), registered_(soup.points.size(), 0), subs_(soup.face_count()),
+        closed_(soup.face_count(), 0), registered_(soup.points.size(), 0), not_generic_(soup.face_count(), 0), subs_(soup.face_count()),
         cluster_(soup.face_count()) {
     points_.reserve(soup.points.size());
     for (const Point3d& p : soup.points) points_.emplace_back(p[0], p[1], p[2]);
@@ -679,9 +681,10 @@ class Regularizer {
 
   // §3.5 in three steps. plan() gathers what a triangle's sub-triangulation
   // needs and hands out the ids of new points (segments, their crossings):
-  // sequential. triangulate() builds it reading shared state only: run for
-  // every intersecting triangle at once, in parallel, before the growth
-  // (the growth reaches all of them anyway). commit() turns the result into
+  // sequential. triangulate() builds it reading its plan and the points
+  // only: run for every intersecting triangle, on the other cores while
+  // planning goes on, before the growth (the growth reaches all of them
+  // anyway). commit() turns the result into
   // pieces when the growth reaches the triangle, so pieces are numbered in
   // the growth's order as before.
 
@@ -697,6 +700,9 @@ class Regularizer {
     std::vector<Index> lone;  // a triangle alone: single-point intersections, in partner order
     std::vector<Chain> segs;  // a triangle alone: its segments
     std::vector<Ends> meets;  // a cluster: its members' intersections with other planes
+    /// A triangle alone: the crossings on its edges (edge e from corner e),
+    /// as on_edge_ had them when it was handed to be triangulated.
+    std::array<std::vector<Index>, 3> on_edges;
   };
   /// A sub-triangulation's faces that are pieces. A vertex is a global id,
   /// or -1 - k for lifted[k] (a crossing the triangulation constructed);
@@ -715,7 +721,7 @@ class Regularizer {
   };
 
   /// Every intersecting triangle's sub-triangulation, planned in index order
-  /// and built in parallel.
+  /// and built in parallel, beside the planning.
   void presplit() {
     std::vector<Index> roots;
     for (std::size_t f = 0; f < soup_.face_count(); ++f)
@@ -731,15 +737,36 @@ class Regularizer {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, roots.size()), [&](const tbb::blocked_range<std::size_t>& r) {
       for (std::size_t s = r.begin(); s != r.end(); ++s) axis[s] = projection_axis(roots[s]);
     });
-    for (std::size_t r = 0; r < roots.size(); ++r) {
-      slot_[roots[r]] = Index(plans_.size());
-      plans_.push_back(plan(roots[r], axis[r]));
-    }
-    known_crossings_ = {};
+    // Each plan is triangulated (by the other cores) as soon as what it
+    // reads is final: the plan itself and, for a triangle alone in its
+    // plane, the crossings on its edges. Those are its own segments' ends,
+    // named by its own planning, when every segment of its is generic (an
+    // edge of it crosses a face only where it meets that face, a partner,
+    // and the same generic test names the crossing for both triangles
+    // sharing the edge); after all planning otherwise.
+    plans_.resize(roots.size());
     triangulated_.resize(roots.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, roots.size()), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t s = r.begin(); s != r.end(); ++s) triangulated_[s] = triangulate(plans_[s], roots[s]);
-    });
+    tbb::task_group triangulations;
+    auto triangulate_later = [&](std::size_t s) {
+      Plan& p = plans_[s];
+      if (p.cluster.size() == 1) {
+        const FaceView fv = soup_.face(roots[s]);
+        for (int e = 0; e < 3; ++e)
+          if (const auto it = on_edge_.find(undirected_edge_key(fv[e], fv[(e + 1) % 3])); it != on_edge_.end())
+            p.on_edges[std::size_t(e)] = it->second;
+      }
+      triangulations.run([this, s, t = roots[s]] { triangulated_[s] = triangulate(plans_[s], t); });
+    };
+    std::vector<std::size_t> last;
+    for (std::size_t r = 0; r < roots.size(); ++r) {
+      slot_[roots[r]] = Index(r);
+      plans_[r] = plan(roots[r], axis[r]);
+      if (plans_[r].cluster.size() == 1 && not_generic_[roots[r]]) last.push_back(r);
+      else triangulate_later(r);
+    }
+    for (std::size_t r : last) triangulate_later(r);
+    triangulations.wait();
+    known_crossings_ = {};
   }
 
   /// Replaces input triangle t (which intersects others) by its
@@ -866,8 +893,8 @@ class Regularizer {
     cdt.insert_constraint(a, b);
   }
 
-  /// The constrained triangulation of t's plan; reads shared state only
-  /// (points, the points on input edges), so triangles go in parallel.
+  /// The constrained triangulation of t's plan; reads the plan and points_
+  /// only (elements of which never move), so it runs beside planning.
   Triangulated triangulate(const Plan& plan, Index t) const {
     const Ids& cluster = plan.cluster;
     const int i = plan.i, j = plan.j, k = plan.k;
@@ -895,7 +922,7 @@ class Regularizer {
       sign.push_back(int(CGAL::orientation(corners.back()[0], corners.back()[1], corners.back()[2])));
     }
     if (cluster.size() == 1) {
-      place_edge_points(cdt, t, i, j, placed);
+      place_edge_points(cdt, t, plan, placed);
       for (Index id : plan.lone) insert(id);
       for (const Chain& x : plan.segs) {
         CDT::Vertex_handle from = insert(x.a);
@@ -1042,6 +1069,7 @@ class Regularizer {
     ++r_.segments;
     Ends ids;
     if (!generic_segment(t, u, ids, [this](Index p, Index q, Index w) { return edge_crossing(p, q, w); })) {
+      not_generic_[t] = not_generic_[u] = 1;
       auto tri = [&](Index f) {
         const FaceView fv = soup_.face(f);
         return K::Triangle_3(points_[fv[0]], points_[fv[1]], points_[fv[2]]);
@@ -1144,19 +1172,20 @@ class Regularizer {
   }
 
   /// Inserts the points known to lie on triangle t's edges (the crossings
-  /// named by edge_crossing) at their place: sorted along each edge and
+  /// named by edge_crossing, handed over in its plan) at their place: sorted along each edge and
   /// split into it, so the triangulation never tests their (exactly zero)
   /// orientation against the edge.
-  void place_edge_points(CDT& cdt, Index t, int i, int j, std::unordered_map<Index, CDT::Vertex_handle>& placed) const {
+  void place_edge_points(CDT& cdt, Index t, const Plan& plan,
+                         std::unordered_map<Index, CDT::Vertex_handle>& placed) const {
+    const int i = plan.i, j = plan.j;
     const FaceView fv = soup_.face(t);
     std::array<CDT::Vertex_handle, 3> corner;
     for (auto h = cdt.finite_vertices_begin(); h != cdt.finite_vertices_end(); ++h)
       for (int c = 0; c < 3; ++c)
         if (h->info().id == std::int64_t(fv[c])) corner[c] = h;
     for (int e = 0; e < 3; ++e) {
-      const auto it = on_edge_.find(undirected_edge_key(fv[e], fv[(e + 1) % 3]));
-      if (it == on_edge_.end()) continue;
-      std::vector<Index> pts = it->second;
+      std::vector<Index> pts = plan.on_edges[std::size_t(e)];
+      if (pts.empty()) continue;
       std::sort(pts.begin(), pts.end());
       pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
       // along the edge from corner e: by the coordinate that changes most
@@ -1293,7 +1322,9 @@ class Regularizer {
 
   const Soup& soup_;
   RegularizeReport& r_;
-  std::vector<EPoint> points_;  // input vertices, then points on intersection curves
+  /// Input vertices, then points on intersection curves. Elements never
+  /// move: planning appends while other threads triangulate earlier plans.
+  tbb::concurrent_vector<EPoint> points_;
   /// Registered points by value_hash: the last registered, then each the
   /// one before (same_hash_, by point id); equal points are one.
   struct Head {
@@ -1303,6 +1334,7 @@ class Regularizer {
   std::vector<Index> same_hash_;
   std::vector<std::vector<Index>> partners_;  // per input face: the faces it intersects
   std::vector<char> split_, closed_, registered_;
+  std::vector<char> not_generic_;  // per input face: a segment of it is not generic_segment()'s
   std::vector<std::vector<Index>> subs_;  // per input face: its sub-triangles
   std::vector<Index> slot_;                // per cluster root: its plan and triangulation
   std::vector<Plan> plans_;
