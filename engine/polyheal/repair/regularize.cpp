@@ -598,12 +598,16 @@ class Regularizer {
   /// to the seeds (out unchanged).
   void around_windings(Index p, Index a, Index b, const Ids& around, bool strict,
                        std::vector<std::pair<Index, int>>& out) {
-    const EPoint& A = points_[a];
-    const EVector u = points_[b] - A;
-    const EVector n0 = CGAL::cross_product(u, points_[third(p, a, b)] - A);
+    // Exact orientations of the corners (filtered on their intervals, no
+    // constructions): n = (B - A) x (C - A), C the third corner of p, and w
+    // = D - A for a piece with third corner D; n . w is orientation(A, B,
+    // C, D), (B - A) x w1 . w2 is orientation(A, B, D1, D2), and within p's
+    // plane n . ((B - A) x w) > 0 says D lies on C's side of AB
+    // (coplanar_orientation).
+    const EPoint &A = points_[a], &B = points_[b], &C = points_[third(p, a, b)];
     struct Item {
       Index piece;
-      EVector w;      // third vertex - A
+      Index third;    // its third corner
       int half;       // 0: angle in (0, pi) from p, 1: pi, 2: (pi, 2 pi)
       bool entering;  // traverses b -> a: crossing it while rotating enters its inside
     };
@@ -611,25 +615,25 @@ class Regularizer {
     const Index plane = root(pieces_[p].source);
     for (Index q : around) {
       if (q == p) continue;
-      const EVector w = points_[third(q, a, b)] - A;
+      const Index d = third(q, a, b);
       int half = 1;
       // A piece of p's own plane (its triangle or cluster) across the edge
       // lies opposite p (two pieces of one triangulation do not overlap):
       // known without an exact test, which would be degenerate and costly.
       if (root(pieces_[q].source) != plane) {
-        const CGAL::Sign side = CGAL::sign(n0 * w);
+        const CGAL::Orientation side = CGAL::orientation(A, B, C, points_[d]);
         half = side == CGAL::POSITIVE ? 0 : side == CGAL::NEGATIVE ? 2 : 1;
-        if (half == 1 && CGAL::is_positive(n0 * CGAL::cross_product(u, w))) {
+        if (half == 1 && CGAL::coplanar_orientation(A, B, C, points_[d]) == CGAL::POSITIVE) {
           if (!strict) return;
           throw UnsupportedInput(coplanar_message(pieces_[p].source, pieces_[q].source));
         }
       }
-      items.push_back({q, w, half, traverses(q, b, a)});
+      items.push_back({q, d, half, traverses(q, b, a)});
     }
     auto before = [&](const Item& x, const Item& y) {
       if (x.half != y.half) return x.half < y.half;
       if (x.half == 1) return false;
-      return CGAL::is_positive(CGAL::cross_product(u, x.w) * y.w);
+      return CGAL::orientation(A, B, points_[x.third], points_[y.third]) == CGAL::POSITIVE;
     };
     std::sort(items.begin(), items.end(), before);
     for (std::size_t k = 1; k < items.size(); ++k)
