@@ -1877,12 +1877,20 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   }
   const Soup input = apply_weld(raw, weld_identical_points(raw.points));
   if (input.face_count() == 0) throw UnsupportedInput("no faces");
+  InspectOptions io;
+  io.observer = o.observer;
+  io.self_intersections = o.known_pairs;
+  const Report in = inspect(input, io);
   // A closed, consistently oriented surface (non-manifold edges allowed):
   // every edge used as often in each direction. Then the winding number is
   // defined everywhere off the surface. Walls and doubled faces that stop
   // that are left out first (reported); the rest is regularized, and the
-  // output is certified against the whole input.
-  if (const std::vector<std::size_t> walls = walls_to_leave_out(input); !walls.empty()) {
+  // output is certified against the whole input. (A surface whose every
+  // edge is used once each way — closed, oriented, no edge of three or more
+  // faces, as the inspection found — balances: nothing to look for.)
+  const bool balanced = in.boundary_edges.empty() && in.nonmanifold_edges.empty() && in.misoriented_edges.empty();
+  if (const std::vector<std::size_t> walls = balanced ? std::vector<std::size_t>{} : walls_to_leave_out(input);
+      !walls.empty()) {
     Soup rest;
     rest.points = raw.points;
     std::vector<std::size_t> kept;
@@ -1906,10 +1914,6 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
     if (o.certify) certify(raw, result.soup, result.source_face, result.report);
     return result;
   }
-  InspectOptions io;
-  io.observer = o.observer;
-  io.self_intersections = o.known_pairs;
-  const Report in = inspect(input, io);
   r.zero_area_faces = in.degenerate_faces.size();
   r.faces = in.faces;
   r.vertices = raw.points.size();
