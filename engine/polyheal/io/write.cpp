@@ -3,11 +3,15 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <vector>
+
+#include <tbb/parallel_for.h>
 
 #include "polyheal/mesh/errors.h"
 
@@ -51,17 +55,46 @@ void put_point(std::string& out, const Point3d& p) {
   put_double(out, p[2]);
 }
 
+/// Appends put(text, i) for i = 0 .. n - 1 to `out`, in that order; large
+/// n in chunks formatted in parallel (a large mesh's text is mostly number
+/// formatting), the same bytes.
+template <class Put>
+void append_each(std::string& out, std::size_t n, const Put& put) {
+  constexpr std::size_t kChunk = std::size_t(1) << 14;
+  const std::size_t chunks = (n + kChunk - 1) / kChunk;
+  if (chunks <= 1) {
+    for (std::size_t i = 0; i < n; ++i) put(out, i);
+    return;
+  }
+  std::vector<std::string> part(chunks);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+    for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) put(part[c], i);
+  });
+  std::size_t size = out.size();
+  for (const std::string& p : part) size += p.size();
+  out.reserve(size);
+  for (const std::string& p : part) out += p;
+}
+
+/// One line per point: its coordinates.
+void put_point_lines(std::string& out, const Soup& s) {
+  append_each(out, s.points.size(), [&](std::string& text, std::size_t i) {
+    put_point(text, s.points[i]);
+    text += '\n';
+  });
+}
+
 /// One line per face: the corner count, then the 0-based indices (OFF and
 /// .smesh share it).
 void put_faces(std::string& out, const Soup& s) {
-  for (std::size_t f = 0; f < s.face_count(); ++f) {
-    put_uint(out, s.face(f).size());
+  append_each(out, s.face_count(), [&](std::string& text, std::size_t f) {
+    put_uint(text, s.face(f).size());
     for (Index i : s.face(f)) {
-      out += ' ';
-      put_uint(out, i);
+      text += ' ';
+      put_uint(text, i);
     }
-    out += '\n';
-  }
+    text += '\n';
+  });
 }
 
 std::string off(const Soup& s) {
@@ -70,10 +103,7 @@ std::string off(const Soup& s) {
   out += ' ';
   put_uint(out, s.face_count());
   out += " 0\n";
-  for (const Point3d& p : s.points) {
-    put_point(out, p);
-    out += '\n';
-  }
+  put_point_lines(out, s);
   put_faces(out, s);
   return out;
 }
@@ -85,12 +115,12 @@ std::string smesh(const Soup& s) {
   std::string out = "# polyheal: surface for TetGen (tetgen -p)\n";
   put_uint(out, s.points.size());
   out += " 3 0 0\n";
-  for (std::size_t i = 0; i < s.points.size(); ++i) {
-    put_uint(out, i);
-    out += ' ';
-    put_point(out, s.points[i]);
-    out += '\n';
-  }
+  append_each(out, s.points.size(), [&](std::string& text, std::size_t i) {
+    put_uint(text, i);
+    text += ' ';
+    put_point(text, s.points[i]);
+    text += '\n';
+  });
   put_uint(out, s.face_count());
   out += " 0\n";
   put_faces(out, s);
@@ -100,11 +130,11 @@ std::string smesh(const Soup& s) {
 
 std::string obj(const Soup& s) {
   std::string out = "# polyheal\n";
-  for (const Point3d& p : s.points) {
-    out += "v ";
-    put_point(out, p);
-    out += '\n';
-  }
+  append_each(out, s.points.size(), [&](std::string& text, std::size_t i) {
+    text += "v ";
+    put_point(text, s.points[i]);
+    text += '\n';
+  });
   std::int32_t group = -1;
   for (std::size_t f = 0; f < s.face_count(); ++f) {
     if (!s.face_group.empty() && s.face_group[f] != group && s.face_group[f] >= 0) {
@@ -175,28 +205,19 @@ std::string ply(const Soup& s, bool ascii) {
   out += "\nproperty double x\nproperty double y\nproperty double z\nelement face ";
   put_uint(out, s.face_count());
   out += "\nproperty list uint int vertex_indices\nend_header\n";
-  for (const Point3d& p : s.points) {
-    if (ascii) {
-      put_point(out, p);
-      out += '\n';
-    } else {
-      for (double c : p) put_bin(out, c);
-    }
+  if (ascii) {
+    put_point_lines(out, s);
+    put_faces(out, s);
+    return out;
   }
-  for (std::size_t f = 0; f < s.face_count(); ++f) {
+  append_each(out, s.points.size(), [&](std::string& bytes, std::size_t i) {
+    for (double c : s.points[i]) put_bin(bytes, c);
+  });
+  append_each(out, s.face_count(), [&](std::string& bytes, std::size_t f) {
     FaceView v = s.face(f);
-    if (ascii) {
-      put_uint(out, v.size());
-      for (Index i : v) {
-        out += ' ';
-        put_uint(out, i);
-      }
-      out += '\n';
-    } else {
-      put_bin(out, static_cast<std::uint32_t>(v.size()));
-      for (Index i : v) put_bin(out, static_cast<std::int32_t>(i));
-    }
-  }
+    put_bin(bytes, static_cast<std::uint32_t>(v.size()));
+    for (Index i : v) put_bin(bytes, static_cast<std::int32_t>(i));
+  });
   return out;
 }
 
