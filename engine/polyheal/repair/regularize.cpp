@@ -24,6 +24,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <optional>
 #include <unordered_map>
@@ -1946,16 +1947,20 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
 
   t0 = std::chrono::steady_clock::now();
   if (o.observer) o.observer->stage("growing the valid region");
-  Regularizer grow(input, in.self_intersections, in, r);
-  grow.run(o.observer);
-  grow.tally();
-  r.seconds_intersections = grow.seconds_intersections;
+  auto grow = std::make_unique<Regularizer>(input, in.self_intersections, in, r);
+  grow->run(o.observer);
+  grow->tally();
+  r.seconds_intersections = grow->seconds_intersections;
   r.seconds_grow = seconds_since(t0) - r.seconds_intersections;
 
   t0 = std::chrono::steady_clock::now();
   if (o.observer) o.observer->stage("stitching");
   std::vector<char> made;  // per output vertex: a point on an intersection curve (rounded)
-  result.soup = grow.output(result.source_face, made);
+  result.soup = grow->output(result.source_face, made);
+  // The growth's data (its exact points, pieces, plans and maps) is freed on
+  // another core while the stitching goes on (Hand1's raw offset: 0.03 s).
+  tbb::task_group freeing;
+  freeing.run([&grow] { grow.reset(); });
   snap_rounded(result, made, r);
   split_pinches(input, in.nonmanifold_vertices.empty(), result, made, r);
   r.new_vertices = std::size_t(std::count(made.begin(), made.end(), char(1)));
@@ -2023,6 +2028,7 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   }
   r.faces_out = result.soup.face_count();
   r.vertices_out = result.soup.points.size();
+  freeing.wait();
   r.seconds_stitch = seconds_since(t0);
 
   if (o.certify) {
