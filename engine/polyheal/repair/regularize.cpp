@@ -527,6 +527,8 @@ class Regularizer {
       front.pop_back();
       if (split_[pieces_[p].source]) close(pieces_[p].source);
       const Piece piece = pieces_[p];
+      for (int e = 0; e < 3; ++e)  // the edges looked up below: their slots fetched together
+        if (piece.across[e] == kNoPiece) edges_.prefetch(undirected_edge_key(piece.v[e], piece.v[(e + 1) % 3]));
       for (int e = 0; e < 3; ++e) {
         const Index a = piece.v[e], b = piece.v[(e + 1) % 3];
         next.clear();
