@@ -129,9 +129,6 @@ class Components {
   std::vector<Solid> solids_;
 };
 
-}  // namespace
-
-namespace {
 Nesting nesting_of(Components& parts, bool crossing) {
   Nesting n;
   const Soup& welded = parts.welded();

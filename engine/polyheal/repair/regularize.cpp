@@ -192,8 +192,8 @@ class Regularizer {
  public:
   Regularizer(const Soup& soup, const std::vector<FacePair>& pairs, const Report& report, RegularizeReport& r)
       : soup_(soup), r_(r), partners_(soup.face_count()), split_(soup.face_count(), 0),
-        closed_(soup.face_count(), 0), registered_(soup.points.size(), 0), not_generic_(soup.face_count(), 0), subs_(soup.face_count()),
-        cluster_(soup.face_count()) {
+        closed_(soup.face_count(), 0), registered_(soup.points.size(), 0), not_generic_(soup.face_count(), 0),
+        subs_(soup.face_count()), cluster_(soup.face_count()) {
     points_.reserve(soup.points.size());
     for (const Point3d& p : soup.points) points_.emplace_back(p[0], p[1], p[2]);
     // Coplanar overlaps (and duplicate faces) join their triangles into one
@@ -691,9 +691,8 @@ class Regularizer {
   // sequential. triangulate() builds it reading its plan and the points
   // only: run for every intersecting triangle, on the other cores while
   // planning goes on, before the growth (the growth reaches all of them
-  // anyway). commit() turns the result into
-  // pieces when the growth reaches the triangle, so pieces are numbered in
-  // the growth's order as before.
+  // anyway). commit() turns the result into pieces when the growth reaches
+  // the triangle, so pieces are numbered in the growth's order as before.
 
   /// A segment of a triangle alone in its plane (its intersection with a
   /// partner) from a to b through the crossings on it, in order.
@@ -1057,7 +1056,6 @@ class Regularizer {
     return {soup_.points[v[0]], soup_.points[v[1]], soup_.points[v[2]]};
   }
 
-  /// The input faces with an edge `key` (sorted list lookup).
   /// The input faces with edge `key`, one that is not linked (see
   /// link_untouched_edges()).
   Ids faces_with_edge(std::uint64_t key) const {
@@ -1179,9 +1177,9 @@ class Regularizer {
   }
 
   /// Inserts the points known to lie on triangle t's edges (the crossings
-  /// named by edge_crossing, handed over in its plan) at their place: sorted along each edge and
-  /// split into it, so the triangulation never tests their (exactly zero)
-  /// orientation against the edge.
+  /// named by edge_crossing, handed over in its plan) at their place:
+  /// sorted along each edge and split into it, so the triangulation never
+  /// tests their (exactly zero) orientation against the edge.
   void place_edge_points(CDT& cdt, Index t, const Plan& plan,
                          std::unordered_map<Index, CDT::Vertex_handle>& placed) const {
     const int i = plan.i, j = plan.j;
