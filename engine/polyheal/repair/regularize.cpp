@@ -474,7 +474,8 @@ class Regularizer {
     return winding;
   }
 
-  /// The AABB tree of the input triangles, built on the first line cast.
+  /// The AABB tree of the input triangles, built on the first call
+  /// (presplit() asks for it beside the planning).
   const Tree& tree() {
     if (triangles_.empty()) {
       triangles_.reserve(soup_.face_count());
@@ -753,6 +754,9 @@ class Regularizer {
     plans_.resize(roots.size());
     triangulated_.resize(roots.size());
     tbb::task_group triangulations;
+    // The seeds' line casts need the input's AABB tree right after this; the
+    // other core builds it first (the growth has nothing to do beside it).
+    triangulations.run([this] { tree(); });
     auto triangulate_later = [&](std::size_t s) {
       Plan& p = plans_[s];
       if (p.cluster.size() == 1) {
