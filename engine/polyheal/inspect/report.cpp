@@ -35,10 +35,11 @@ void count_cracks(const Soup& soup, const InspectOptions& o, Report& r);
 
 }  // namespace
 
-bool Report::certified_clean() const {
-  return faces > 0 && closed && manifold && oriented && degenerate_faces.empty() && duplicate_faces.empty() &&
-         self_intersections.empty();
+bool Report::clean_but_for_crossings() const {
+  return faces > 0 && closed && manifold && oriented && degenerate_faces.empty() && duplicate_faces.empty();
 }
+
+bool Report::certified_clean() const { return clean_but_for_crossings() && self_intersections.empty(); }
 
 Report inspect(const Soup& input, const InspectOptions& o) {
   Report r;
@@ -74,9 +75,7 @@ Report inspect(const Soup& input, const InspectOptions& o) {
   std::optional<Nesting> nested;
   auto topology_and_shape_pass = [&] {
     topology_and_shape(soup, weld, o, r, topo);
-    const bool clean_but_crossings = r.faces > 0 && r.closed && r.manifold && r.oriented &&
-                                     r.degenerate_faces.empty() && r.duplicate_faces.empty();
-    if (o.parallel && r.inward_components > 0 && clean_but_crossings) nested = nesting_of_welded(soup, topo);
+    if (o.parallel && r.inward_components > 0 && r.clean_but_for_crossings()) nested = nesting_of_welded(soup, topo);
   };
   if (o.parallel) tbb::parallel_invoke(self_intersection_pass, topology_and_shape_pass);
   else {

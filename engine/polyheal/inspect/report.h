@@ -119,6 +119,8 @@ struct Report {
   /// Closed, 2-manifold, consistently oriented, no degenerate face, no
   /// duplicate face, no self-intersection, at least one face.
   bool certified_clean() const;
+  /// certified_clean() but for self-intersections (those not asked about).
+  bool clean_but_for_crossings() const;
   /// certified_clean() and nothing TetGen's tolerances would trip over
   /// (false unless inspected with InspectOptions::tetgen_segments), and not
   /// refused by TetGen itself where it was run.

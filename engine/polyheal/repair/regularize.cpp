@@ -1907,7 +1907,7 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   // output is certified against the whole input. (A surface whose every
   // edge is used once each way — closed, oriented, no edge of three or more
   // faces, as the inspection found — balances: nothing to look for.)
-  const bool balanced = in.boundary_edges.empty() && in.nonmanifold_edges.empty() && in.misoriented_edges.empty();
+  const bool balanced = in.closed && in.oriented && in.nonmanifold_edges.empty();
   if (const std::vector<std::size_t> walls = balanced ? std::vector<std::size_t>{} : walls_to_leave_out(input);
       !walls.empty()) {
     Soup rest;
