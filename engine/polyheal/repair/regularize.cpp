@@ -193,7 +193,7 @@ class Regularizer {
   Regularizer(const Soup& soup, const std::vector<FacePair>& pairs, const Report& report, RegularizeReport& r)
       : soup_(soup), r_(r), partners_(soup.face_count()), split_(soup.face_count(), 0),
         closed_(soup.face_count(), 0), registered_(soup.points.size(), 0), not_generic_(soup.face_count(), 0),
-        subs_(soup.face_count()), cluster_(soup.face_count()) {
+        cluster_(soup.face_count()) {
     points_.reserve(soup.points.size());
     for (const Point3d& p : soup.points) points_.emplace_back(p[0], p[1], p[2]);
     // Coplanar overlaps (and duplicate faces) join their triangles into one
@@ -230,7 +230,8 @@ class Regularizer {
         pieces_.back().alive = false;
         pieces_.back().state = kInvalid;
       }
-      for (int e = 0; e < 3; ++e) face_edges_.push_back({undirected_edge_key(fv[e], fv[(e + 1) % 3]), Index(f)});
+      for (int e = 0; e < 3; ++e)
+        face_edges_.push_back({undirected_edge_key(fv[e], fv[(e + 1) % 3]), Index(3 * f + std::size_t(e))});
     }
     tbb::parallel_sort(face_edges_.begin(), face_edges_.end());
     link_untouched_edges();
@@ -242,6 +243,7 @@ class Regularizer {
   void run(Observer* observer) {
     const std::size_t faces = soup_.face_count();
     presplit();
+    commit_all();
     // Seeds among the intersection-free triangles first (no sub-triangulation
     // needed to classify them), then among the sub-triangles of what is left.
     for (std::size_t f = 0; f < faces; ++f) {
@@ -259,19 +261,21 @@ class Regularizer {
         split(Index(f));
         r_.split_unreached += r_.triangles_split - before;
       }
-      for (Index q : subs_[f])
+      const Index s = slot_[root(Index(f))];
+      for (Index q = base_[s]; q < base_[s + 1]; ++q)
         if (pieces_[q].state == kUnvisited) seed(q);
     }
   }
 
   /// The valid pieces as a soup: input vertices keep their doubles, new
-  /// points are rounded to the nearest double.
+  /// points are rounded to the nearest double. Input triangles come first,
+  /// then sub-triangles in the order the growth split their triangles.
   Soup output(std::vector<std::size_t>& source, std::vector<char>& made) const {
     Soup out;
     std::vector<std::int64_t> id(points_.size(), -1);
     std::vector<std::pair<Index, Index>> fresh;  // (output point, new point) to round
-    for (const Piece& p : pieces_) {
-      if (!p.alive || p.state != kValid) continue;
+    auto emit = [&](const Piece& p) {
+      if (!p.alive || p.state != kValid) return;
       std::array<Index, 3> f;
       for (int k = 0; k < 3; ++k) {
         std::int64_t& i = id[p.v[k]];
@@ -286,7 +290,10 @@ class Regularizer {
       }
       out.add_triangle(f[0], f[1], f[2]);
       source.push_back(p.source);
-    }
+    };
+    for (std::size_t q = 0; q < soup_.face_count(); ++q) emit(pieces_[q]);
+    for (Index s : order_)
+      for (Index q = base_[s]; q < base_[s + 1]; ++q) emit(pieces_[q]);
     // each an exact rounding (a rational's division): in parallel
     tbb::parallel_for(std::size_t(0), fresh.size(),
                       [&](std::size_t n) { out.points[fresh[n].first] = nearest_point3d(points_[fresh[n].second]); });
@@ -312,7 +319,7 @@ class Regularizer {
     UnionFind components(faces);
     for (std::size_t k = 1; k < face_edges_.size(); ++k)
       if (face_edges_[k].first == face_edges_[k - 1].first)
-        components.unite(face_edges_[k].second, face_edges_[k - 1].second);
+        components.unite(face_edges_[k].second / 3, face_edges_[k - 1].second / 3);
     std::vector<char> root_kept(faces, 0), root_seen(faces, 0);
     for (std::size_t f = 0; f < faces; ++f) {
       const std::size_t root = components.find(f);
@@ -354,26 +361,20 @@ class Regularizer {
   /// overlapping ones) has both as corners, and a triangle with both has
   /// the edge. Their `across` is set, and the growth crosses such an edge
   /// without looking it up (most of the surface, usually). The input
-  /// triangles of every other edge start its list in the edge lookup
-  /// (by index; sub-triangles follow).
+  /// triangles' uses of every other edge go into the edge lookup (see
+  /// edge_uses_).
   void link_untouched_edges() {
     auto untouched = [&](Index f) { return partners_[f].empty() && !zero_area_[f]; };
-    auto link = [&](Index f, std::uint64_t key, Index g) {
-      const FaceView fv = soup_.face(f);
-      for (int e = 0; e < 3; ++e)
-        if (undirected_edge_key(fv[e], fv[(e + 1) % 3]) == key) pieces_[f].across[e] = g;
-    };
     for (std::size_t k = 0; k < face_edges_.size();) {
       const std::uint64_t key = face_edges_[k].first;
       std::size_t m = k + 1;
       while (m < face_edges_.size() && face_edges_[m].first == key) ++m;
-      const Index f = face_edges_[k].second, g = face_edges_[k + 1 < m ? k + 1 : k].second;
-      if (m - k == 2 && f != g && untouched(f) && untouched(g)) {
-        link(f, key, g);
-        link(g, key, f);
+      const Index u = face_edges_[k].second, w = face_edges_[k + 1 < m ? k + 1 : k].second;
+      if (m - k == 2 && u / 3 != w / 3 && untouched(u / 3) && untouched(w / 3)) {
+        pieces_[u / 3].across[u % 3] = w / 3;
+        pieces_[w / 3].across[w % 3] = u / 3;
       } else {
-        Ids& list = edges_[key];
-        for (std::size_t i = k; i < m; ++i) list.push_back(face_edges_[i].second);
+        for (std::size_t i = k; i < m; ++i) edge_uses_.push_back({key, face_edges_[i].second});
       }
       k = m;
     }
@@ -527,20 +528,21 @@ class Regularizer {
       const Index p = front.back();
       front.pop_back();
       if (split_[pieces_[p].source]) close(pieces_[p].source);
-      const Piece piece = pieces_[p];
-      for (int e = 0; e < 3; ++e)  // the edges looked up below: their slots fetched together
-        if (piece.across[e] == kNoPiece) edges_.prefetch(undirected_edge_key(piece.v[e], piece.v[(e + 1) % 3]));
+      const Piece& piece = pieces_[p];
+      for (int e = 0; e < 3; ++e)  // the edges looked up below: their uses fetched together
+        if (piece.across[e] == kNoPiece) __builtin_prefetch(&edge_uses_[edge_group_[3 * std::size_t(p) + e]]);
       for (int e = 0; e < 3; ++e) {
         const Index a = piece.v[e], b = piece.v[(e + 1) % 3];
         next.clear();
-        const Ids around = piece.across[e] != kNoPiece ? Ids{p, piece.across[e]} : pieces_around(a, b, true);
+        const Ids around = piece.across[e] != kNoPiece ? Ids{p, piece.across[e]} : pieces_around(p, e);
         if (around.size() == 2) {
           const Index other = around[0] == p ? around[1] : around[0];
           if (traverses(other, b, a) && pieces_[other].weight == piece.weight) next.push_back({other, piece.front});
         } else if (around.size() > 2) {
-          if (river_done_.contains(undirected_edge_key(a, b))) continue;  // every piece around is classified
+          char& done = river_done_[edge_group_[3 * std::size_t(p) + std::size_t(e)]];
+          if (done) continue;  // every piece around is classified
           around_windings(p, a, b, around, piece.state == kValid, next);
-          if (!next.empty()) river_done_[undirected_edge_key(a, b)] = 1;
+          if (!next.empty()) done = 1;
         }
         if (piece.state == kValid && std::none_of(next.begin(), next.end(), [&](const auto& n) {
               return traverses(n.first, b, a) && n.second <= 0 && n.second + pieces_[n.first].weight >= 1;
@@ -569,27 +571,25 @@ class Regularizer {
     return false;
   }
 
-  /// The live pieces with edge ab. With `complete`, an input triangle among
-  /// them that intersects others is split first (its pieces take its place).
-  Ids pieces_around(Index a, Index b, bool complete) {
-    const std::uint64_t key = undirected_edge_key(a, b);
-    for (;;) {
-      Ids out;
-      const Ids* found = edges_.find(key);  // input faces (pieces 0..F-1, alive or not), then sub-triangles
-      const Ids candidates = found ? *found : Ids{};
-      bool again = false;
-      for (Index p : candidates) {
-        if (!pieces_[p].alive) continue;
-        const Index src = pieces_[p].source;
-        if (complete && !partners_[src].empty() && !split_[src]) {
-          split(src);
-          again = true;
-          break;
-        }
-        out.push_back(p);
-      }
-      if (!again) return out;
-    }
+  /// The live pieces with edge e of piece p (an edge no `across` links).
+  /// An input triangle among them that intersects others is split (its
+  /// pieces take its place).
+  Ids pieces_around(Index p, int e) {
+    Ids out;
+    each_use(p, e, [&](Index q) {
+      if (q < soup_.face_count()) split(q);  // (when it intersects others)
+      if (pieces_[q].alive) out.push_back(q);
+    });
+    return out;
+  }
+
+  /// Calls visit(q) for each piece q with edge e of piece p (an edge no
+  /// `across` links; p among them): input triangles first, by index.
+  template <class Visit>
+  void each_use(Index p, int e, Visit visit) const {
+    const std::size_t start = edge_group_[3 * std::size_t(p) + std::size_t(e)];
+    for (std::size_t k = start; k < edge_uses_.size() && edge_uses_[k].key == edge_uses_[start].key; ++k)
+      visit(edge_uses_[k].use / 3);
   }
 
   /// §3.6 crossing the river, generalised: the pieces around edge ab sorted
@@ -680,10 +680,10 @@ class Regularizer {
     for (Index m : cluster_of(t)) {
       closed_[m] = 1;
       for (Index u : partners_[m]) split(u);
-      const FaceView fv = soup_.face(m);
-      for (int e = 0; e < 3; ++e)
-        for (Index n : faces_with_edge(undirected_edge_key(fv[e], fv[(e + 1) % 3])))
-          if (!partners_[n].empty()) split(n);
+      for (int e = 0; e < 3; ++e)  // (m intersects others: no edge of it is linked)
+        each_use(m, e, [&](Index n) {
+          if (n < soup_.face_count()) split(n);
+        });
     }
   }
 
@@ -692,8 +692,9 @@ class Regularizer {
   // sequential. triangulate() builds it reading its plan and the points
   // only: run for every intersecting triangle, on the other cores while
   // planning goes on, before the growth (the growth reaches all of them
-  // anyway). commit() turns the result into pieces when the growth reaches
-  // the triangle, so pieces are numbered in the growth's order as before.
+  // anyway). commit_all() turns every result into pieces, in parallel, and
+  // sorts their edges into one lookup; the growth only reads them and
+  // marks the triangles it reaches (split()), whose order output() keeps.
 
   /// A segment of a triangle alone in its plane (its intersection with a
   /// partner) from a to b through the crossings on it, in order.
@@ -784,12 +785,17 @@ class Regularizer {
   /// (its cluster) are split with it in one triangulation: a face of it
   /// covered by several of them is one piece, oriented and weighted by their
   /// net count (zero: no surface there).
+  ///
+  /// The pieces were all made beforehand (commit_all()); the growth's
+  /// splits are marked and counted here, in its order, which output()
+  /// follows.
   void split(Index t) {
     if (split_[t] || partners_[t].empty()) return;
     const Index s = slot_[root(t)];
-    commit(plans_[s], triangulated_[s]);
-    plans_[s] = Plan();
-    triangulated_[s] = Triangulated();
+    for (Index m : plans_[s].cluster) split_[m] = 1;
+    r_.triangles_split += plans_[s].cluster.size();
+    r_.sub_triangles += base_[s + 1] - base_[s];
+    order_.push_back(s);
   }
 
   EVector normal(Index f) const {
@@ -1009,34 +1015,60 @@ class Regularizer {
     return out;
   }
 
-  /// The pieces of a planned and triangulated cluster.
-  void commit(const Plan& plan, const Triangulated& tri) {
-    for (Index m : plan.cluster) {
-      split_[m] = 1;
-      kill(m);
+  /// The pieces of every planned and triangulated cluster, numbered by slot
+  /// and made in parallel, and the lookup of every edge that no `across`
+  /// links (edge_uses_, edge_group_). The growth then reads them only;
+  /// split() marks the triangles it reaches.
+  void commit_all() {
+    const std::size_t slots = plans_.size(), faces = soup_.face_count();
+    // the points triangulations constructed (few), named in slot order
+    std::vector<std::vector<Index>> lifted(slots);
+    for (std::size_t s = 0; s < slots; ++s)
+      for (const EPoint& p : triangulated_[s].lifted) lifted[s].push_back(vertex_id(p));
+    std::vector<std::size_t> open(slots + 1, 0);  // per slot: its pieces' edges without `across`
+    tbb::parallel_for(std::size_t(0), slots, [&](std::size_t s) {
+      for (const SubFace& face : triangulated_[s].faces)
+        for (int e = 0; e < 3; ++e) open[s + 1] += face.across[e] < 0 ? 1 : 0;
+    });
+    base_.assign(slots + 1, Index(faces));
+    open[0] = edge_uses_.size();  // the input triangles' uses come first
+    for (std::size_t s = 0; s < slots; ++s) {
+      base_[s + 1] = base_[s] + Index(triangulated_[s].faces.size());
+      open[s + 1] += open[s];
     }
-    r_.triangles_split += plan.cluster.size();
-    std::vector<Index> lifted;
-    for (const EPoint& p : tri.lifted) lifted.push_back(vertex_id(p));
-    const Index base = Index(pieces_.size());
-    std::vector<Index> made;
-    for (const SubFace& face : tri.faces) {
-      std::array<Index, 3> v;
-      for (int e = 0; e < 3; ++e) v[e] = face.v[e] >= 0 ? Index(face.v[e]) : lifted[std::size_t(-1 - face.v[e])];
-      Piece piece{v, face.source};
-      piece.weight = face.weight;
-      for (int e = 0; e < 3; ++e)
-        if (face.across[e] >= 0) piece.across[e] = base + Index(face.across[e]);
-      made.push_back(Index(pieces_.size()));
-      pieces_.push_back(piece);
-    }
-    // the edges without a piece across go into the edge lookup
-    for (Index q : made)
-      for (int e = 0; e < 3; ++e)
-        if (pieces_[q].across[e] == kNoPiece)
-          edges_[undirected_edge_key(pieces_[q].v[e], pieces_[q].v[(e + 1) % 3])].push_back(q);
-    for (Index m : plan.cluster) subs_[m] = made;
-    r_.sub_triangles += made.size();
+    pieces_.resize(base_[slots]);
+    edge_uses_.resize(open[slots]);
+    tbb::parallel_for(std::size_t(0), slots, [&](std::size_t s) {
+      std::size_t u = open[s];
+      Index q = base_[s];
+      for (const SubFace& face : triangulated_[s].faces) {
+        Piece& piece = pieces_[q];
+        for (int e = 0; e < 3; ++e)
+          piece.v[e] = face.v[e] >= 0 ? Index(face.v[e]) : lifted[s][std::size_t(-1 - face.v[e])];
+        piece.source = face.source;
+        piece.weight = face.weight;
+        for (int e = 0; e < 3; ++e) {
+          if (face.across[e] >= 0) piece.across[e] = base_[s] + Index(face.across[e]);
+          else edge_uses_[u++] = {undirected_edge_key(piece.v[e], piece.v[(e + 1) % 3]), 3 * q + Index(e)};
+        }
+        ++q;
+      }
+    });
+    for (std::size_t f = 0; f < faces; ++f)
+      if (!partners_[f].empty()) pieces_[f].alive = false;  // its pieces take its place
+    triangulated_ = {};
+    tbb::parallel_sort(edge_uses_.begin(), edge_uses_.end());
+    edge_group_.assign(3 * pieces_.size(), kNoPiece);
+    river_done_.assign(edge_uses_.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edge_uses_.size()),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        std::size_t start = r.begin();
+                        while (start > 0 && edge_uses_[start - 1].key == edge_uses_[r.begin()].key) --start;
+                        for (std::size_t k = r.begin(); k != r.end(); ++k) {
+                          if (edge_uses_[k].key != edge_uses_[start].key) start = k;
+                          edge_group_[edge_uses_[k].use] = Index(start);
+                        }
+                      });
   }
 
   /// The point common to the planes of input faces t, u and w (nullopt when
@@ -1053,21 +1085,9 @@ class Regularizer {
     return id;
   }
 
-  void kill(Index t) { pieces_[t].alive = false; }  // an input face: found by faces_with_edge, skipped
-
   detail::Triangle3d triangle(Index f) const {
     const FaceView v = soup_.face(f);
     return {soup_.points[v[0]], soup_.points[v[1]], soup_.points[v[2]]};
-  }
-
-  /// The input faces with edge `key`, one that is not linked (see
-  /// link_untouched_edges()).
-  Ids faces_with_edge(std::uint64_t key) const {
-    Ids out;
-    if (const Ids* found = edges_.find(key))
-      for (Index p : *found)
-        if (p < soup_.face_count()) out.push_back(p);
-    return out;
   }
 
   /// The intersection of input triangles t and u as global vertex ids (one
@@ -1344,13 +1364,23 @@ class Regularizer {
   std::vector<std::vector<Index>> partners_;  // per input face: the faces it intersects
   std::vector<char> split_, closed_, registered_;
   std::vector<char> not_generic_;  // per input face: a segment of it is not generic_segment()'s
-  std::vector<std::vector<Index>> subs_;  // per input face: its sub-triangles
   std::vector<Index> slot_;                // per cluster root: its plan and triangulation
   std::vector<Plan> plans_;
-  std::vector<Triangulated> triangulated_;  // until committed (with its plan)
-  std::vector<Piece> pieces_;             // input faces (ids 0..F-1), then sub-triangles
-  KeyMap<Ids> edges_;  // pieces by edge: input faces (but two untouched ones), then sub-triangles
-  std::vector<std::pair<std::uint64_t, Index>> face_edges_;           // (edge, input face), sorted
+  std::vector<Triangulated> triangulated_;  // until committed
+  std::vector<Index> base_;                 // per slot: its first piece (base_[slots]: the end)
+  std::vector<Index> order_;                // slots in the order the growth split their triangles
+  std::vector<Piece> pieces_;               // input faces (ids 0..F-1), then sub-triangles by slot
+  /// A use of an edge by a piece: 3 * piece + e for its edge e (from corner e).
+  struct EdgeUse {
+    std::uint64_t key;
+    Index use;
+    bool operator<(const EdgeUse& o) const { return key != o.key ? key < o.key : use < o.use; }
+  };
+  /// The uses of every edge no `across` links, sorted by edge, then piece:
+  /// input faces (but two untouched ones') first, then sub-triangles.
+  std::vector<EdgeUse> edge_uses_;
+  std::vector<Index> edge_group_;  // per use (an edge without `across`): its edge's first in edge_uses_
+  std::vector<std::pair<std::uint64_t, Index>> face_edges_;  // (edge, 3 * input face + e), sorted
   KeyMap<Ends> segments_;                                             // by face pair
   struct PairHash {
     std::size_t operator()(const std::pair<std::uint64_t, Index>& k) const {
@@ -1374,7 +1404,7 @@ class Regularizer {
     }
   };
   std::unordered_map<std::array<Index, 3>, Index, TripleHash> triples_;  // crossing of two segments on a face
-  KeyMap<char> river_done_;  // intersection-curve edges whose pieces are all classified (1)
+  std::vector<char> river_done_;  // by edge (its first in edge_uses_): an intersection curve's, all classified
   std::vector<char> zero_area_;                                         // per input face (§3.1)
   UnionFind cluster_;                                                   // over coplanar overlaps
   std::unordered_map<Index, std::vector<Index>> members_;              // cluster root -> its faces (2 or more)
