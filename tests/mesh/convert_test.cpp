@@ -1,6 +1,7 @@
 // Soup -> Surface_mesh: builds valid oriented 2-manifolds, explains the rest.
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <random>
 
 #include <CGAL/intersections.h>
@@ -87,6 +88,22 @@ TEST_CASE("convert: exact coordinates round to the nearest double", "[mesh]") {
   CHECK(s.points[0][2] == 0.1 / 3);
   CHECK(s.points[1][0] == 1.0 / 27);
   CHECK(s.points[1][1] == 1e300 / 7);
+}
+
+TEST_CASE("convert: exact values halfway between doubles round to even, subnormals as IEEE does", "[mesh]") {
+  auto exact = [](double x) { return Kernel::FT(x); };
+  const Kernel::FT half_ulp = exact(std::ldexp(1.0, -53));  // half the spacing of doubles in [1, 2)
+  const Kernel::FT tiny = exact(std::ldexp(1.0, -1074));    // the least subnormal
+  CHECK(nearest_double(exact(1) + half_ulp) == 1.0);                         // tie: 1 has the even mantissa
+  CHECK(nearest_double(-(exact(1) + half_ulp)) == -1.0);
+  CHECK(nearest_double(exact(1) + 3 * half_ulp) == 1.0 + std::ldexp(1.0, -51));  // tie the other way
+  CHECK(nearest_double(exact(1) + half_ulp + exact(std::ldexp(1.0, -100))) == 1.0 + std::ldexp(1.0, -52));
+  CHECK(nearest_double(exact(1) + half_ulp - exact(std::ldexp(1.0, -100))) == 1.0);
+  CHECK(nearest_double(tiny * 3 / 2) == std::ldexp(1.0, -1073));  // tie between 1 and 2 subnormal steps
+  CHECK(nearest_double(tiny / 2) == 0.0);                         // tie between 0 and one step
+  CHECK(nearest_double(tiny * 3 / 4) == std::ldexp(1.0, -1074));
+  CHECK(nearest_double(-tiny / 4) == 0.0);
+  CHECK(std::signbit(nearest_double(-tiny / 4)));
 }
 
 TEST_CASE("convert: pinch copies share one identity, every other vertex, old or new, is itself", "[mesh]") {

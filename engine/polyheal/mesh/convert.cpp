@@ -5,6 +5,8 @@
 #include <algorithm>
 
 #include <cstring>
+#include <gmpxx.h>
+#include <mpfr.h>
 #include <type_traits>
 #include <unordered_map>
 
@@ -212,18 +214,21 @@ Soup mesh_to_soup(const Mesh& mesh) {
 
 namespace {
 
-/// An exact number rounded to the nearest double (ties to even).
-template <class ET>
-double round_exact(const ET& e) {
-  const std::pair<double, double> iv = CGAL::to_interval(e);  // tight: equal or adjacent doubles
-  if (iv.first == iv.second) return iv.first;
-  const ET mid = (ET(iv.first) + ET(iv.second)) / 2;
-  if (e < mid) return iv.first;
-  if (mid < e) return iv.second;
-  std::uint64_t bits;
-  std::memcpy(&bits, &iv.first, sizeof bits);
-  return (bits & 1) == 0 ? iv.first : iv.second;
+/// An exact rational rounded to the nearest double (ties to even), as
+/// IEEE 754 rounds: one correctly rounded MPFR conversion at 53 bits, its
+/// subnormal range as a double's (as CGAL's own to_interval for mpq_class
+/// does, rounding away from zero there).
+double round_exact(const mpq_class& e) {
+  const mpfr_exp_t emin = mpfr_get_emin();
+  mpfr_set_emin(-1073);
+  MPFR_DECL_INIT(y, 53);
+  const int inexact = mpfr_set_q(y, e.get_mpq_t(), MPFR_RNDN);
+  mpfr_subnormalize(y, inexact, MPFR_RNDN);
+  const double d = mpfr_get_d(y, MPFR_RNDN);  // exact: y has a double's precision and range
+  mpfr_set_emin(emin);
+  return d;
 }
+static_assert(std::is_same_v<Kernel::Exact_kernel::FT, mpq_class>);
 
 }  // namespace
 
