@@ -1929,6 +1929,7 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   InspectOptions io;
   io.observer = o.observer;
   io.self_intersections = o.known_pairs;
+  io.crack_ratio = 0;  // cracks are not reported here (the search is serial)
   const Report in = inspect(input, io);
   // A closed, consistently oriented surface (non-manifold edges allowed):
   // every edge used as often in each direction. Then the winding number is
