@@ -3,6 +3,8 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
+#include <cstdint>
 #include <cstddef>
 #include <numeric>
 #include <vector>
@@ -21,6 +23,38 @@ struct UnionFind {
     a = find(a);
     b = find(b);
     if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+/// Disjoint sets that threads may join at once (lock-free): a root is
+/// linked to the lesser root by compare-and-swap, retried when another
+/// thread linked it first; finds halve paths as they go (each write points
+/// a node at one of its ancestors, whatever else changed meanwhile). As in
+/// UnionFind, a set's representative is its smallest element, once every
+/// unite() has returned.
+struct ConcurrentUnionFind {
+  std::vector<std::atomic<std::uint32_t>> parent;
+  explicit ConcurrentUnionFind(std::size_t n) : parent(n) {
+    for (std::size_t i = 0; i < n; ++i) parent[i].store(std::uint32_t(i), std::memory_order_relaxed);
+  }
+  std::uint32_t find(std::uint32_t x) {
+    for (;;) {
+      std::uint32_t p = parent[x].load(std::memory_order_relaxed);
+      if (p == x) return x;
+      const std::uint32_t g = parent[p].load(std::memory_order_relaxed);
+      if (g != p) parent[x].compare_exchange_weak(p, g, std::memory_order_relaxed);
+      x = g;
+    }
+  }
+  void unite(std::uint32_t a, std::uint32_t b) {
+    for (;;) {
+      a = find(a);
+      b = find(b);
+      if (a == b) return;
+      if (a < b) std::swap(a, b);
+      std::uint32_t expected = a;  // a still a root: link it under the lesser b
+      if (parent[a].compare_exchange_strong(expected, b)) return;
+    }
   }
 };
 

@@ -16,6 +16,7 @@
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 #include <tbb/concurrent_vector.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/task_group.h>
 #include <boost/container/small_vector.hpp>
 
@@ -172,14 +173,13 @@ struct Piece {
   Index source;            // an input face it lies in (and is oriented like)
   int weight = 1;          // coincident sheets it stands for (coplanar overlaps: net count)
   bool alive = true;       // false once the input triangle is split
-  State state = kUnvisited;
-  int front = 0;           // winding number on its outer side, once classified
+  State state = kUnvisited;  // its patch's, once the growth is over (zero-area faces: invalid)
   /// Across edge (v[e], v[e + 1]): the other piece, when the edge is inside
   /// one sub-triangulation and unconstrained (no other piece can have it:
   /// an edge another triangle shares lies on their intersection segment, a
   /// constraint, or on the triangle's own side), or joins two input
   /// triangles that touch nothing else (link_untouched_edges()); kNoPiece
-  /// otherwise, and the edge is looked up among all pieces.
+  /// otherwise, and the edge is looked up among all pieces (edge_uses_).
   std::array<Index, 3> across{kNoPiece, kNoPiece, kNoPiece};
 };
 
@@ -192,17 +192,17 @@ class Regularizer {
  public:
   Regularizer(const Soup& soup, const std::vector<FacePair>& pairs, const Report& report, RegularizeReport& r)
       : soup_(soup), r_(r), partners_(soup.face_count()), split_(soup.face_count(), 0),
-        closed_(soup.face_count(), 0), registered_(soup.points.size(), 0), not_generic_(soup.face_count(), 0),
-        cluster_(soup.face_count()) {
+        registered_(soup.points.size(), 0), not_generic_(soup.face_count(), 0) {
     points_.reserve(soup.points.size());
     for (const Point3d& p : soup.points) points_.emplace_back(p[0], p[1], p[2]);
     // Coplanar overlaps (and duplicate faces) join their triangles into one
     // cluster, sub-triangulated together so that coincident pieces are one
     // piece standing for all the sheets there (its weight).
+    UnionFind cluster(soup.face_count());
     auto join = [&](Index a, Index b) {
       partners_[a].push_back(b);
       partners_[b].push_back(a);
-      if (coplanar(a, b)) cluster_.unite(a, b);
+      if (coplanar(a, b)) cluster.unite(a, b);
     };
     // §3.1: zero-area faces (exactly collinear, or a repeated corner) bound
     // nothing; they stay out of every pair, piece and line (their edges
@@ -218,6 +218,8 @@ class Regularizer {
       std::sort(list.begin(), list.end());
       list.erase(std::unique(list.begin(), list.end()), list.end());
     }
+    roots_.resize(soup.face_count());
+    for (std::size_t f = 0; f < soup.face_count(); ++f) roots_[f] = Index(cluster.find(f));
     for (std::size_t f = 0; f < soup.face_count(); ++f)
       if (root(Index(f)) != f) members_[root(Index(f))].push_back(Index(f));
     for (auto& [c, list] : members_) list.insert(list.begin(), c);
@@ -244,32 +246,39 @@ class Regularizer {
     const std::size_t faces = soup_.face_count();
     presplit();
     commit_all();
+    link_patches();
     // Seeds among the intersection-free triangles first (no sub-triangulation
     // needed to classify them), then among the sub-triangles of what is left.
     for (std::size_t f = 0; f < faces; ++f) {
       if (observer && f % 4096 == 0) observer->progress(0.5 * double(f) / double(faces));
-      if (partners_[f].empty() && pieces_[f].state == kUnvisited) seed(Index(f));
+      if (partners_[f].empty() && state(Index(f)) == kUnvisited) seed(Index(f));
+    }
+    // Triangles no wave reached: their sub-triangles are classified by lines
+    // of their own (a component of the output made only of pieces of
+    // intersecting triangles has no intersection-free seed).
+    for (std::size_t s = 0; s + 1 < base_.size(); ++s) {
+      bool reached = false;
+      for (Index q = base_[s]; q < base_[s + 1] && !reached; ++q) reached = state(q) != kUnvisited;
+      if (!reached) r_.split_unreached += plans_[s].cluster.size();
     }
     for (std::size_t f = 0; f < faces; ++f) {
       if (observer && f % 4096 == 0) observer->progress(0.5 + 0.5 * double(f) / double(faces));
       if (partners_[f].empty()) continue;
-      if (!split_[f]) {
-        // A triangle no wave reached: its sub-triangles are classified by
-        // lines of their own (a component of the output made only of pieces
-        // of intersecting triangles has no intersection-free seed).
-        const std::size_t before = r_.triangles_split;
-        split(Index(f));
-        r_.split_unreached += r_.triangles_split - before;
-      }
       const Index s = slot_[root(Index(f))];
       for (Index q = base_[s]; q < base_[s + 1]; ++q)
-        if (pieces_[q].state == kUnvisited) seed(q);
+        if (state(q) == kUnvisited) seed(q);
     }
+    // each piece's state, its patch's
+    tbb::parallel_for(std::size_t(0), pieces_.size(), [&](std::size_t q) {
+      if (pieces_[q].alive) pieces_[q].state = State(patch_state_[patch_[q]]);
+    });
+    for (const Index q : unjoined_)
+      if (pieces_[q].state == kValid) ++r_.orientation_conflicts;  // no compatible continuation
   }
 
   /// The valid pieces as a soup: input vertices keep their doubles, new
   /// points are rounded to the nearest double. Input triangles come first,
-  /// then sub-triangles in the order the growth split their triangles.
+  /// then sub-triangles, by triangle.
   Soup output(std::vector<std::size_t>& source, std::vector<char>& made) const {
     Soup out;
     std::vector<std::int64_t> id(points_.size(), -1);
@@ -291,9 +300,7 @@ class Regularizer {
       out.add_triangle(f[0], f[1], f[2]);
       source.push_back(p.source);
     };
-    for (std::size_t q = 0; q < soup_.face_count(); ++q) emit(pieces_[q]);
-    for (Index s : order_)
-      for (Index q = base_[s]; q < base_[s + 1]; ++q) emit(pieces_[q]);
+    for (const Piece& p : pieces_) emit(p);
     // each an exact rounding (a rational's division): in parallel
     tbb::parallel_for(std::size_t(0), fresh.size(),
                       [&](std::size_t n) { out.points[fresh[n].first] = nearest_point3d(points_[fresh[n].second]); });
@@ -338,7 +345,7 @@ class Regularizer {
  private:
   // ---- clusters of coplanar overlapping triangles ------------------------
 
-  Index root(Index f) { return Index(cluster_.find(f)); }
+  Index root(Index f) const { return roots_[f]; }
 
   /// Are input faces a and b in one plane (exactly, on the doubles)?
   bool coplanar(Index a, Index b) const {
@@ -386,8 +393,7 @@ class Regularizer {
     ++r_.seeds;
     const std::optional<int> w = winding_outside(q);
     if (!w) return;  // left for the growth to reach; unclassified if it never does
-    pieces_[q].front = *w;
-    flood(q);
+    flood(q, *w);
   }
 
   /// The winding number of the input surface just outside piece q (on the
@@ -513,55 +519,98 @@ class Regularizer {
 
   // ---- growth (§3.4, §3.6) ------------------------------------------------
 
-  /// Classifies q (its outer winding number set) and spreads the winding
-  /// numbers: across an edge with two pieces the neighbour has the same
-  /// outer winding; across an intersection curve (§3.6, an edge with more
-  /// than two pieces) every piece around gets its own from the sorted order
-  /// (continuation), valid and invalid alike, so an invalid region cut off
-  /// by intersection curves needs no winding-number line of its own. A
-  /// piece is valid when winding <= 0 outside and >= 1 inside.
-  void flood(Index q) {
-    std::vector<Index> front{q};
-    classify(q, pieces_[q].front);
+  /// Classifies q's patch (outer winding number `winding`) and spreads the
+  /// winding numbers: a patch's pieces share theirs (across an edge with
+  /// two pieces the neighbour has the same outer winding, link_patches());
+  /// across an intersection curve (§3.6, an edge with more than two pieces)
+  /// every piece around gets its own from the sorted order (continuation),
+  /// valid and invalid alike, so an invalid region cut off by intersection
+  /// curves needs no winding-number line of its own. A piece is valid when
+  /// winding <= 0 outside and >= 1 inside.
+  void flood(Index q, int winding) {
+    std::vector<Index> front{patch_[q]};
+    classify(patch_[q], winding);
     std::vector<std::pair<Index, int>> next;
     while (!front.empty()) {
-      const Index p = front.back();
+      const Index patch = front.back();
       front.pop_back();
-      if (split_[pieces_[p].source]) close(pieces_[p].source);
-      const Piece& piece = pieces_[p];
-      for (int e = 0; e < 3; ++e)  // the edges looked up below: their uses fetched together
-        if (piece.across[e] == kNoPiece) __builtin_prefetch(&edge_uses_[edge_group_[3 * std::size_t(p) + e]]);
-      for (int e = 0; e < 3; ++e) {
-        const Index a = piece.v[e], b = piece.v[(e + 1) % 3];
+      const bool valid = patch_state_[patch] == kValid;
+      auto side = std::lower_bound(river_sides_.begin(), river_sides_.end(), std::uint64_t(patch) << 32);
+      for (; side != river_sides_.end() && *side >> 32 == patch; ++side) {
+        const Index p = Index((*side & 0xffffffffu) / 3);
+        const int e = int((*side & 0xffffffffu) % 3);
+        char& done = river_done_[edge_group_[3 * std::size_t(p) + std::size_t(e)]];
+        if (done) continue;  // every piece around is classified
+        const Index a = pieces_[p].v[e], b = pieces_[p].v[(e + 1) % 3];
         next.clear();
-        const Ids around = piece.across[e] != kNoPiece ? Ids{p, piece.across[e]} : pieces_around(p, e);
-        if (around.size() == 2) {
-          const Index other = around[0] == p ? around[1] : around[0];
-          if (traverses(other, b, a) && pieces_[other].weight == piece.weight) next.push_back({other, piece.front});
-        } else if (around.size() > 2) {
-          char& done = river_done_[edge_group_[3 * std::size_t(p) + std::size_t(e)]];
-          if (done) continue;  // every piece around is classified
-          around_windings(p, a, b, around, piece.state == kValid, next);
-          if (!next.empty()) done = 1;
-        }
-        if (piece.state == kValid && std::none_of(next.begin(), next.end(), [&](const auto& n) {
+        around_windings(p, a, b, pieces_around(p, e), patch_front_[patch], valid, next);
+        if (!next.empty()) done = 1;
+        if (valid && std::none_of(next.begin(), next.end(), [&](const auto& n) {
               return traverses(n.first, b, a) && n.second <= 0 && n.second + pieces_[n.first].weight >= 1;
             }))
           ++r_.orientation_conflicts;  // no compatible continuation
-        for (const auto& [n, winding] : next) {
-          Piece& np = pieces_[n];
-          if (np.state != kUnvisited) continue;
-          classify(n, winding);
-          front.push_back(n);
+        for (const auto& [n, w] : next) {
+          if (patch_state_[patch_[n]] != kUnvisited) continue;
+          classify(patch_[n], w);
+          front.push_back(patch_[n]);
         }
       }
     }
   }
 
-  void classify(Index q, int winding) {
-    Piece& p = pieces_[q];
-    p.front = winding;
-    p.state = winding <= 0 && winding + p.weight >= 1 ? kValid : kInvalid;
+  /// Sets a patch's outer winding number and state.
+  void classify(Index patch, int winding) {
+    patch_front_[patch] = winding;
+    patch_state_[patch] = winding <= 0 && winding + pieces_[patch].weight >= 1 ? kValid : kInvalid;
+  }
+
+  State state(Index q) const { return pieces_[q].alive ? State(patch_state_[patch_[q]]) : pieces_[q].state; }
+
+  /// Do pieces p and o continue each other across p's edge e: o runs it the
+  /// other way (the orientations agree) and stands for as many sheets?
+  bool continues(Index p, int e, Index o) const {
+    const Piece& piece = pieces_[p];
+    return traverses(o, piece.v[(e + 1) % 3], piece.v[e]) && pieces_[o].weight == piece.weight;
+  }
+
+  /// The patches: live pieces joined across every edge with exactly two
+  /// pieces that continue each other share their outer winding number (the
+  /// growth's step across such an edge, §3.4); a patch is named by its
+  /// least piece (patch_). Its sides on intersection curves (edges with
+  /// more than two pieces, where §3.6 crosses the river) are listed by
+  /// patch (river_sides_); an edge with two pieces that do not continue
+  /// each other stops the growth (unjoined_: a conflict where valid).
+  void link_patches() {
+    const std::size_t n = pieces_.size();
+    ConcurrentUnionFind joined(n);
+    tbb::enumerable_thread_specific<std::vector<std::uint64_t>> sides;  // 3 * piece + edge, for now
+    tbb::enumerable_thread_specific<std::vector<Index>> unjoined;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (Index p = Index(r.begin()); p != r.end(); ++p) {
+        const Piece& piece = pieces_[p];
+        if (!piece.alive) continue;
+        for (int e = 0; e < 3; ++e) {
+          Index other = piece.across[e];
+          if (other == kNoPiece) {
+            const Ids around = pieces_around(p, e);
+            if (around.size() > 2) sides.local().push_back(3 * std::uint64_t(p) + std::uint64_t(e));
+            if (around.size() < 2) unjoined.local().push_back(p);  // (not on a closed surface)
+            if (around.size() != 2) continue;
+            other = around[0] == p ? around[1] : around[0];
+          }
+          if (!continues(p, e, other)) unjoined.local().push_back(p);
+          else if (p < other) joined.unite(p, other);
+        }
+      }
+    });
+    patch_.resize(n);
+    tbb::parallel_for(std::size_t(0), n, [&](std::size_t p) { patch_[p] = joined.find(Index(p)); });
+    for (const auto& list : sides)
+      for (const std::uint64_t use : list) river_sides_.push_back(std::uint64_t(patch_[use / 3]) << 32 | use);
+    tbb::parallel_sort(river_sides_.begin(), river_sides_.end());
+    for (const auto& list : unjoined) unjoined_.insert(unjoined_.end(), list.begin(), list.end());
+    patch_state_.assign(n, kUnvisited);
+    patch_front_.assign(n, 0);
   }
 
   bool traverses(Index p, Index a, Index b) const {
@@ -571,36 +620,26 @@ class Regularizer {
     return false;
   }
 
-  /// The live pieces with edge e of piece p (an edge no `across` links).
-  /// An input triangle among them that intersects others is split (its
-  /// pieces take its place).
-  Ids pieces_around(Index p, int e) {
+  /// The live pieces with edge e of piece p (an edge no `across` links; p
+  /// among them): input triangles first, by index.
+  Ids pieces_around(Index p, int e) const {
     Ids out;
-    each_use(p, e, [&](Index q) {
-      if (q < soup_.face_count()) split(q);  // (when it intersects others)
-      if (pieces_[q].alive) out.push_back(q);
-    });
-    return out;
-  }
-
-  /// Calls visit(q) for each piece q with edge e of piece p (an edge no
-  /// `across` links; p among them): input triangles first, by index.
-  template <class Visit>
-  void each_use(Index p, int e, Visit visit) const {
     const std::size_t start = edge_group_[3 * std::size_t(p) + std::size_t(e)];
     for (std::size_t k = start; k < edge_uses_.size() && edge_uses_[k].key == edge_uses_[start].key; ++k)
-      visit(edge_uses_[k].use / 3);
+      if (pieces_[edge_uses_[k].use / 3].alive) out.push_back(edge_uses_[k].use / 3);
+    return out;
   }
 
   /// §3.6 crossing the river, generalised: the pieces around edge ab sorted
   /// by angle, starting from p's outer side; the winding number of each
-  /// wedge followed from p's outer side, so each piece's outer winding
-  /// (appended to `out`). The paper's continuation is the first piece that
-  /// faces a wedge of winding <= 0 and backs onto one of winding >= 1.
+  /// wedge followed from p's outer side (winding `front`), so each piece's
+  /// outer winding (appended to `out`). The paper's continuation is the
+  /// first piece that faces a wedge of winding <= 0 and backs onto one of
+  /// winding >= 1.
   /// Coincident pieces of different planes are an error when p is valid
   /// (they would be on the output); around an invalid p the edge is left
   /// to the seeds (out unchanged).
-  void around_windings(Index p, Index a, Index b, const Ids& around, bool strict,
+  void around_windings(Index p, Index a, Index b, const Ids& around, int front, bool strict,
                        std::vector<std::pair<Index, int>>& out) {
     // Exact orientations of the corners (filtered on their intervals, no
     // constructions): n = (B - A) x (C - A), C the third corner of p, and w
@@ -645,7 +684,7 @@ class Regularizer {
         if (!strict) return;
         throw UnsupportedInput(coplanar_message(pieces_[items[k - 1].piece].source, pieces_[items[k].piece].source));
       }
-    int winding = pieces_[p].front;
+    int winding = front;
     for (const Item& item : items) {
       const int weight = pieces_[item.piece].weight;
       if (item.entering) {  // crossing it enters its inside: its outer side is behind
@@ -670,22 +709,6 @@ class Regularizer {
   }
 
   // ---- sub-triangulation (§3.5) ------------------------------------------
-
-  /// Splits t, every triangle it intersects and every intersecting neighbour
-  /// across its edges: then every piece that can share an edge with a piece
-  /// of t exists.
-  void close(Index t) {
-    if (closed_[t]) return;
-    split(t);
-    for (Index m : cluster_of(t)) {
-      closed_[m] = 1;
-      for (Index u : partners_[m]) split(u);
-      for (int e = 0; e < 3; ++e)  // (m intersects others: no edge of it is linked)
-        each_use(m, e, [&](Index n) {
-          if (n < soup_.face_count()) split(n);
-        });
-    }
-  }
 
   // §3.5 in three steps. plan() gathers what a triangle's sub-triangulation
   // needs and hands out the ids of new points (segments, their crossings):
@@ -778,24 +801,6 @@ class Regularizer {
     for (std::size_t r : last) triangulate_later(r);
     triangulations.wait();
     known_crossings_ = {};
-  }
-
-  /// Replaces input triangle t (which intersects others) by its
-  /// sub-triangles: §3.5 steps 1-3. The triangles t overlaps in its own plane
-  /// (its cluster) are split with it in one triangulation: a face of it
-  /// covered by several of them is one piece, oriented and weighted by their
-  /// net count (zero: no surface there).
-  ///
-  /// The pieces were all made beforehand (commit_all()); the growth's
-  /// splits are marked and counted here, in its order, which output()
-  /// follows.
-  void split(Index t) {
-    if (split_[t] || partners_[t].empty()) return;
-    const Index s = slot_[root(t)];
-    for (Index m : plans_[s].cluster) split_[m] = 1;
-    r_.triangles_split += plans_[s].cluster.size();
-    r_.sub_triangles += base_[s + 1] - base_[s];
-    order_.push_back(s);
   }
 
   EVector normal(Index f) const {
@@ -1015,10 +1020,13 @@ class Regularizer {
     return out;
   }
 
-  /// The pieces of every planned and triangulated cluster, numbered by slot
-  /// and made in parallel, and the lookup of every edge that no `across`
-  /// links (edge_uses_, edge_group_). The growth then reads them only;
-  /// split() marks the triangles it reaches.
+  /// Replaces every input triangle that intersects others by its
+  /// sub-triangles (§3.5 steps 1-3; the triangles it overlaps in its own
+  /// plane, its cluster, are split with it in one triangulation: a face of
+  /// it covered by several of them is one piece, oriented and weighted by
+  /// their net count, zero for no surface there). The pieces are numbered by
+  /// slot and made in parallel, with the lookup of every edge that no
+  /// `across` links (edge_uses_, edge_group_); the growth reads them only.
   void commit_all() {
     const std::size_t slots = plans_.size(), faces = soup_.face_count();
     // the points triangulations constructed (few), named in slot order
@@ -1056,6 +1064,11 @@ class Regularizer {
     });
     for (std::size_t f = 0; f < faces; ++f)
       if (!partners_[f].empty()) pieces_[f].alive = false;  // its pieces take its place
+    for (std::size_t s = 0; s < slots; ++s) {
+      for (Index m : plans_[s].cluster) split_[m] = 1;
+      r_.triangles_split += plans_[s].cluster.size();
+    }
+    r_.sub_triangles += base_[slots] - faces;
     triangulated_ = {};
     tbb::parallel_sort(edge_uses_.begin(), edge_uses_.end());
     edge_group_.assign(3 * pieces_.size(), kNoPiece);
@@ -1362,14 +1375,19 @@ class Regularizer {
   KeyMap<Head> dedup_;
   std::vector<Index> same_hash_;
   std::vector<std::vector<Index>> partners_;  // per input face: the faces it intersects
-  std::vector<char> split_, closed_, registered_;
+  std::vector<char> split_, registered_;
   std::vector<char> not_generic_;  // per input face: a segment of it is not generic_segment()'s
   std::vector<Index> slot_;                // per cluster root: its plan and triangulation
   std::vector<Plan> plans_;
   std::vector<Triangulated> triangulated_;  // until committed
   std::vector<Index> base_;                 // per slot: its first piece (base_[slots]: the end)
-  std::vector<Index> order_;                // slots in the order the growth split their triangles
   std::vector<Piece> pieces_;               // input faces (ids 0..F-1), then sub-triangles by slot
+  std::vector<Index> patch_;                // per piece: its patch (link_patches()), named by its least piece
+  std::vector<char> patch_state_;           // per patch: State
+  std::vector<int> patch_front_;            // per patch: outer winding number, once classified
+  /// Patches' sides on intersection curves: patch << 32 | 3 * piece + edge, sorted.
+  std::vector<std::uint64_t> river_sides_;
+  std::vector<Index> unjoined_;  // a piece per edge of it where the growth stops (see link_patches())
   /// A use of an edge by a piece: 3 * piece + e for its edge e (from corner e).
   struct EdgeUse {
     std::uint64_t key;
@@ -1406,7 +1424,7 @@ class Regularizer {
   std::unordered_map<std::array<Index, 3>, Index, TripleHash> triples_;  // crossing of two segments on a face
   std::vector<char> river_done_;  // by edge (its first in edge_uses_): an intersection curve's, all classified
   std::vector<char> zero_area_;                                         // per input face (§3.1)
-  UnionFind cluster_;                                                   // over coplanar overlaps
+  std::vector<Index> roots_;  // per input face: the root of its cluster (coplanar overlaps, joined)
   std::unordered_map<Index, std::vector<Index>> members_;              // cluster root -> its faces (2 or more)
 
   InputTriangles triangles_;

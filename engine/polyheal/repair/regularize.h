@@ -115,7 +115,8 @@ struct RegularizeReport {
   // growing (the paper's Table 1 and Fig. 2 groups, counted over input triangles)
   std::size_t segments = 0;            // intersection segments constructed (pairs, exactly)
   std::size_t triangles_split = 0;     // triangles sub-triangulated
-  std::size_t split_unreached = 0;     // of those, split by the final pass (no wave reached them)
+  std::size_t split_unreached = 0;     // of those, none of whose sub-triangles a wave from an
+                                       // intersection-free seed classified (lines of their own did)
   std::size_t sub_triangles = 0;       // sub-triangles they were split into
   std::size_t valid = 0, partially_valid = 0, invalid = 0;
   std::size_t seeds = 0, line_casts = 0;  // seeds tried (valid or not), winding-number lines cast
