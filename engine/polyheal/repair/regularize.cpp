@@ -1535,69 +1535,109 @@ void split_pinches(const Soup& input, bool input_manifold, RegularizeResult& res
   // Only vertices of faces that are not input faces kept as they were can
   // pinch (and any vertex, if the input itself is not a manifold).
   std::vector<char> candidate(s.points.size(), input_manifold ? 0 : 1);
-  if (input_manifold)
+  if (input_manifold) {
+    std::vector<char> kept(F);
+    tbb::parallel_for(std::size_t(0), F,
+                      [&](std::size_t f) { kept[f] = kept_as_input(input, s, result.source_face, f) ? 1 : 0; });
     for (std::size_t f = 0; f < F; ++f)
-      if (!kept_as_input(input, s, result.source_face, f))
+      if (!kept[f])
         for (Index v : s.face(f)) candidate[v] = 1;
-  // (vertex, other end of an edge at it, face): faces around a vertex that
-  // share an edge there belong to one cone
-  std::vector<std::array<Index, 3>> uses;
+  }
+  // (vertex, other end of an edge at it) and the face: faces around a
+  // vertex that share an edge there belong to one cone
+  struct Use {
+    std::uint64_t edge;  // vertex << 32 | other end
+    Index face;
+    Index vertex() const { return Index(edge >> 32); }
+    bool operator<(const Use& o) const { return edge != o.edge ? edge < o.edge : face < o.face; }
+  };
+  std::vector<Use> uses;
   for (std::size_t f = 0; f < F; ++f)
     for (int k = 0; k < 3; ++k) {
       const Index v = s.face(f)[k];
       if (!candidate[v]) continue;
-      uses.push_back({v, s.face(f)[(k + 1) % 3], Index(f)});
-      uses.push_back({v, s.face(f)[(k + 2) % 3], Index(f)});
+      uses.push_back({std::uint64_t(v) << 32 | s.face(f)[(k + 1) % 3], Index(f)});
+      uses.push_back({std::uint64_t(v) << 32 | s.face(f)[(k + 2) % 3], Index(f)});
     }
   tbb::parallel_sort(uses.begin(), uses.end());  // (equal entries are identical: any order is the one order)
-  // cones as sets of (vertex, face) corners: index 3f + corner
-  UnionFind cone(3 * F);
-  auto corner = [&](Index f, Index v) {
-    const FaceView fv = s.face(f);
-    return Index(3 * f + (fv[0] == v ? 0 : fv[1] == v ? 1 : 2));
+  std::vector<std::size_t> starts;  // each vertex's run of uses
+  for (std::size_t k = 0; k < uses.size(); ++k)
+    if (k == 0 || uses[k].vertex() != uses[k - 1].vertex()) starts.push_back(k);
+  starts.push_back(uses.size());
+  // Per vertex, in parallel (a vertex's cones are made of its own corners):
+  // its corners 3f + k joined into cones; the vertices with more than one.
+  struct Pinch {
+    Index v;
+    std::vector<std::vector<Index>> cones;  // corners, ascending; cones by their least corner
   };
-  for (std::size_t k = 0; k < uses.size();) {
-    std::size_t m = k;
-    while (m < uses.size() && uses[m][0] == uses[k][0] && uses[m][1] == uses[k][1]) ++m;
-    const Index v = uses[k][0];
-    if (m - k > 2) {
-      // a non-manifold edge: the union's boundary touches itself along it;
-      // each solid's two faces there (around its inside wedge) form one
-      // sheet, so the sheets come apart like the cones of a pinch
-      std::vector<Index> faces;
-      for (std::size_t q = k; q < m; ++q) faces.push_back(uses[q][2]);
-      const auto sheets = pair_sheets(s, v, uses[k][1], faces);
-      if (!sheets.empty()) {
-        for (const auto& [f, g] : sheets) cone.unite(corner(f, v), corner(g, v));
+  tbb::enumerable_thread_specific<std::vector<Pinch>> found;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, starts.size() - 1), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<Index> corners;
+    std::vector<std::size_t> cone_of;
+    for (std::size_t g = r.begin(); g != r.end(); ++g) {
+      const std::size_t k0 = starts[g], k1 = starts[g + 1];
+      const Index v = uses[k0].vertex();
+      auto corner = [&](Index f) {
+        const FaceView fv = s.face(f);
+        return Index(3 * f + (fv[0] == v ? 0 : fv[1] == v ? 1 : 2));
+      };
+      corners.clear();
+      for (std::size_t k = k0; k < k1; ++k) corners.push_back(corner(uses[k].face));
+      std::sort(corners.begin(), corners.end());
+      corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+      UnionFind cone(corners.size());  // over the corners' places: a cone's root is its least corner
+      auto unite = [&](Index f, Index h) {
+        auto place = [&](Index x) {
+          return std::size_t(std::lower_bound(corners.begin(), corners.end(), corner(x)) - corners.begin());
+        };
+        cone.unite(place(f), place(h));
+      };
+      for (std::size_t k = k0; k < k1;) {
+        std::size_t m = k;
+        while (m < k1 && uses[m].edge == uses[k].edge) ++m;
+        if (m - k > 2) {
+          // a non-manifold edge: the union's boundary touches itself along it;
+          // each solid's two faces there (around its inside wedge) form one
+          // sheet, so the sheets come apart like the cones of a pinch
+          std::vector<Index> faces;
+          for (std::size_t q = k; q < m; ++q) faces.push_back(uses[q].face);
+          const auto sheets = pair_sheets(s, v, Index(uses[k].edge), faces);
+          if (!sheets.empty()) {
+            for (const auto& [f, h] : sheets) unite(f, h);
+            k = m;
+            continue;
+          }
+        }
+        for (std::size_t q = k + 1; q < m; ++q) unite(uses[q].face, uses[k].face);
         k = m;
-        continue;
       }
+      bool pinched = false;
+      for (std::size_t i = 0; i < corners.size() && !pinched; ++i) pinched = cone.find(i) != 0;
+      if (!pinched) continue;
+      Pinch pinch{v, {}};
+      cone_of.assign(corners.size(), 0);
+      for (std::size_t i = 0; i < corners.size(); ++i) {
+        const std::size_t root = cone.find(i);
+        if (root == i) {  // a cone's least corner: cones come in that order
+          cone_of[i] = pinch.cones.size();
+          pinch.cones.emplace_back();
+        }
+        cone_of[i] = cone_of[root];
+        pinch.cones[cone_of[i]].push_back(corners[i]);
+      }
+      found.local().push_back(std::move(pinch));
     }
-    for (std::size_t q = k + 1; q < m; ++q) cone.unite(corner(uses[q][2], v), corner(uses[k][2], v));
-    k = m;
-  }
-  // per vertex, its cones (roots)
-  std::map<Index, std::map<Index, std::vector<Index>>> cones;  // vertex -> root -> corners
-  {
-    std::vector<Index> first_root(s.points.size(), ~Index(0));
-    std::vector<char> pinched(s.points.size(), 0);
-    for (std::size_t c = 0; c < 3 * F; ++c) {
-      const Index v = s.face(c / 3)[c % 3];
-      if (!candidate[v]) continue;
-      const Index root = Index(cone.find(c));
-      if (first_root[v] == ~Index(0)) first_root[v] = root;
-      else if (first_root[v] != root) pinched[v] = 1;
-    }
-    for (std::size_t c = 0; c < 3 * F; ++c) {
-      const Index v = s.face(c / 3)[c % 3];
-      if (candidate[v] && pinched[v]) cones[v][Index(cone.find(c))].push_back(Index(c));
-    }
-  }
-  for (auto& [v, by_root] : cones) {
+  });
+  std::vector<Pinch> pinches;
+  for (auto& list : found)
+    for (Pinch& pinch : list) pinches.push_back(std::move(pinch));
+  std::sort(pinches.begin(), pinches.end(), [](const Pinch& a, const Pinch& b) { return a.v < b.v; });
+  for (const Pinch& pinch : pinches) {
     ++r.pinches_split;
+    const Index v = pinch.v;
     const Point3d p = s.points[v];
     bool first = true;
-    for (auto& [root, corners] : by_root) {
+    for (const std::vector<Index>& corners : pinch.cones) {
       Point3d centre{0, 0, 0};
       double shortest = std::numeric_limits<double>::infinity();
       std::size_t n = 0;
