@@ -510,11 +510,14 @@ class Regularizer {
   /// proj() known exactly, for the triangulations: a leaf, not a lazy tree
   /// over p's own (their exact orientation tests on collinear points, which
   /// no filter decides, evaluated such a tree for every projection).
+  /// Its intervals are p's own (tight: an exact value's, as a leaf's are and
+  /// a node's become once evaluated), not computed again from the rationals.
   static K::Point_2 exact_proj(const EPoint& p, int i, int j) {
-    const auto& a = p.approx();
-    if (a[i].is_point() && a[j].is_point()) return K::Point_2(a[i].inf(), a[j].inf());
+    if (const auto& a = p.approx(); a[i].is_point() && a[j].is_point()) return K::Point_2(a[i].inf(), a[j].inf());
     const auto& e = p.exact();
-    return K::Point_2(K::Point_2::Rep(K::Exact_kernel::Point_2(e[i], e[j])));
+    const auto& a = p.approx();
+    using Rep = K::Point_2::Rep;
+    return K::Point_2(Rep(new CGAL::Lazy_rep_0<Rep::AT, Rep::ET, K::E2A>(Rep::AT(a[i], a[j]), Rep::ET(e[i], e[j]))));
   }
 
   // ---- growth (§3.4, §3.6) ------------------------------------------------
