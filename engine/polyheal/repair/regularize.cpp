@@ -283,8 +283,8 @@ class Regularizer {
     Soup out;
     std::vector<std::int64_t> id(points_.size(), -1);
     std::vector<std::pair<Index, Index>> fresh;  // (output point, new point) to round
-    auto emit = [&](const Piece& p) {
-      if (!p.alive || p.state != kValid) return;
+    for (const Piece& p : pieces_) {
+      if (!p.alive || p.state != kValid) continue;
       std::array<Index, 3> f;
       for (int k = 0; k < 3; ++k) {
         std::int64_t& i = id[p.v[k]];
@@ -299,8 +299,7 @@ class Regularizer {
       }
       out.add_triangle(f[0], f[1], f[2]);
       source.push_back(p.source);
-    };
-    for (const Piece& p : pieces_) emit(p);
+    }
     // each an exact rounding (a rational's division): in parallel
     tbb::parallel_for(std::size_t(0), fresh.size(),
                       [&](std::size_t n) { out.points[fresh[n].first] = nearest_point3d(points_[fresh[n].second]); });
@@ -1131,7 +1130,7 @@ class Regularizer {
       }
     }
     segments_[key] = ids;
-    return ids;
+    return segments_[key];
   }
 
   /// The common case of segment(): triangles t and u in general position
