@@ -199,10 +199,10 @@ class Regularizer {
     // cluster, sub-triangulated together so that coincident pieces are one
     // piece standing for all the sheets there (its weight).
     UnionFind cluster(soup.face_count());
-    auto join = [&](Index a, Index b) {
+    auto join = [&](Index a, Index b, bool same_plane) {
       partners_[a].push_back(b);
       partners_[b].push_back(a);
-      if (coplanar(a, b)) cluster.unite(a, b);
+      if (same_plane) cluster.unite(a, b);
     };
     // §3.1: zero-area faces (exactly collinear, or a repeated corner) bound
     // nothing; they stay out of every pair, piece and line (their edges
@@ -210,31 +210,39 @@ class Regularizer {
     // one's middle corner at a T-junction is split there as an intersection)
     zero_area_.assign(soup.face_count(), 0);
     for (std::size_t f : report.degenerate_faces) zero_area_[f] = 1;
-    for (const FacePair& p : pairs)
-      if (!zero_area_[p.first] && !zero_area_[p.second]) join(Index(p.first), Index(p.second));
+    std::vector<char> same_plane(pairs.size());
+    tbb::parallel_for(std::size_t(0), pairs.size(), [&](std::size_t k) {
+      same_plane[k] = coplanar(Index(pairs[k].first), Index(pairs[k].second)) ? 1 : 0;
+    });
+    for (std::size_t k = 0; k < pairs.size(); ++k)
+      if (!zero_area_[pairs[k].first] && !zero_area_[pairs[k].second])
+        join(Index(pairs[k].first), Index(pairs[k].second), same_plane[k]);
     for (const auto& d : report.duplicate_faces)
-      if (!zero_area_[d[0]] && !zero_area_[d[1]]) join(Index(d[0]), Index(d[1]));
-    for (auto& list : partners_) {
+      if (!zero_area_[d[0]] && !zero_area_[d[1]]) join(Index(d[0]), Index(d[1]), coplanar(Index(d[0]), Index(d[1])));
+    tbb::parallel_for(std::size_t(0), partners_.size(), [&](std::size_t f) {
+      std::vector<Index>& list = partners_[f];
       std::sort(list.begin(), list.end());
       list.erase(std::unique(list.begin(), list.end()), list.end());
-    }
+    });
     roots_.resize(soup.face_count());
     for (std::size_t f = 0; f < soup.face_count(); ++f) roots_[f] = Index(cluster.find(f));
     for (std::size_t f = 0; f < soup.face_count(); ++f)
       if (root(Index(f)) != f) members_[root(Index(f))].push_back(Index(f));
     for (auto& [c, list] : members_) list.insert(list.begin(), c);
-    pieces_.reserve(soup.face_count());
-    face_edges_.reserve(3 * soup.face_count());
-    for (std::size_t f = 0; f < soup.face_count(); ++f) {
+    pieces_.resize(soup.face_count());
+    face_edges_.resize(3 * soup.face_count());
+    tbb::parallel_for(std::size_t(0), soup.face_count(), [&](std::size_t f) {
       const FaceView fv = soup.face(f);
-      pieces_.push_back({{fv[0], fv[1], fv[2]}, Index(f)});
+      Piece& piece = pieces_[f];
+      piece.v = {fv[0], fv[1], fv[2]};
+      piece.source = Index(f);
       if (zero_area_[f]) {
-        pieces_.back().alive = false;
-        pieces_.back().state = kInvalid;
+        piece.alive = false;
+        piece.state = kInvalid;
       }
       for (int e = 0; e < 3; ++e)
-        face_edges_.push_back({undirected_edge_key(fv[e], fv[(e + 1) % 3]), Index(3 * f + std::size_t(e))});
-    }
+        face_edges_[3 * f + std::size_t(e)] = {undirected_edge_key(fv[e], fv[(e + 1) % 3]), Index(3 * f + std::size_t(e))};
+    });
     tbb::parallel_sort(face_edges_.begin(), face_edges_.end());
     link_untouched_edges();
     for (int k = 0; k < 3; ++k) below_[k] = report.bbox_min[k] - (1.0 + std::abs(report.bbox_min[k]));
@@ -2029,13 +2037,9 @@ RegularizeResult regularize(const Soup& raw, const RegularizeOptions& o) {
   r.vertices = raw.points.size();
   r.intersecting_pairs_in = in.self_intersections.size();
   {
-    std::vector<std::size_t> fs;
-    for (const FacePair& p : in.self_intersections) {
-      fs.push_back(p.first);
-      fs.push_back(p.second);
-    }
-    std::sort(fs.begin(), fs.end());
-    r.intersecting_faces_in = std::size_t(std::unique(fs.begin(), fs.end()) - fs.begin());
+    std::vector<char> intersecting(input.face_count(), 0);
+    for (const FacePair& p : in.self_intersections) intersecting[p.first] = intersecting[p.second] = 1;
+    r.intersecting_faces_in = std::size_t(std::count(intersecting.begin(), intersecting.end(), char(1)));
   }
   r.bbox_diagonal = bbox_diagonal(in);
   r.seconds_detect = seconds_since(t0);
