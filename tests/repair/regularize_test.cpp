@@ -112,6 +112,49 @@ TEST_CASE("regularize: three boxes with a triple overlap and edges through face 
   CHECK(off_surface(in, out) < 1e-12);
 }
 
+TEST_CASE("regularize: two tetrahedra whose every face crosses the other are seeded by lines of their own") {
+  // A stella octangula, the second tetrahedron moved a little off the
+  // first's mirror image (no edge through an edge): every one of the 8
+  // triangles crosses the other solid, so no intersection-free triangle can
+  // seed the growth and all 8 are classified from seeds among their
+  // sub-triangles (split_unreached counts them).
+  auto tetrahedron = [](const std::array<Point3d, 4>& p) {  // facing outwards
+    Soup s;
+    s.points.assign(p.begin(), p.end());
+    s.add_triangle(0, 1, 2);
+    s.add_triangle(0, 3, 1);
+    s.add_triangle(0, 2, 3);
+    s.add_triangle(1, 3, 2);
+    if (inspect(s).signed_volume < 0)
+      for (std::size_t f = 0; f < s.face_count(); ++f) std::swap(s.indices[s.offsets[f] + 1], s.indices[s.offsets[f] + 2]);
+    return s;
+  };
+  const std::array<Point3d, 4> a{{{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}}};
+  const std::array<Point3d, 4> b{{{-1.01, -0.98, -1.02}, {-0.97, 1.03, 0.99}, {1.02, -1.01, 0.98}, {0.99, 0.97, -1.03}}};
+  const Soup in = test::concat(tetrahedron(a), tetrahedron(b));
+  const Report before = inspect(in);
+  REQUIRE(before.closed);
+  REQUIRE(before.oriented);
+  std::set<std::size_t> crossing;
+  for (const FacePair& p : before.self_intersections) crossing.insert({p.first, p.second});
+  REQUIRE(crossing.size() == 8);  // every triangle crosses the other solid
+  const RegularizeResult r = regularize(in);
+  const Soup out = written(r, "regularize_stella.off");
+  const Report rep = inspect(out);
+  CHECK(rep.certified_clean());
+  CHECK(rep.components == 1);
+  // the union: more than either solid (each 8/3), less than both
+  CHECK(rep.signed_volume > 2.7);
+  CHECK(rep.signed_volume < before.signed_volume);
+  CHECK(r.report.triangles_split == 8);
+  CHECK(r.report.split_unreached == 8);
+  CHECK(r.report.seeds >= 1);
+  CHECK(r.report.unclassified == 0);
+  CHECK(r.report.orientation_conflicts == 0);
+  CHECK(r.report.components_removed == 0);
+  CHECK(off_surface(in, out) < 1e-12);
+}
+
 TEST_CASE("regularize: a solid inside another is removed (and counted), a cavity is kept") {
   const Box big{{{0, 0, 0}, {4, 4, 4}}}, small{{{1, 1.5, 1.25}, {2, 2.5, 2.25}}};
   SECTION("enclosed solid") {
