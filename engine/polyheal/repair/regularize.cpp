@@ -255,6 +255,14 @@ class Regularizer {
     presplit();
     commit_all();
     link_patches();
+    // The new points' nearest doubles (the output's, most of them), on the
+    // other cores while the growth walks the patches on this one.
+    rounding_.run([this] {
+      const std::size_t first = soup_.points.size();
+      rounded_.resize(points_.size() - first);
+      tbb::parallel_for(std::size_t(0), rounded_.size(),
+                        [&](std::size_t n) { rounded_[n] = nearest_point3d(points_[first + n]); });
+    });
     // Seeds among the intersection-free triangles first (no sub-triangulation
     // needed to classify them), then among the sub-triangles of what is left.
     for (std::size_t f = 0; f < faces; ++f) {
@@ -287,7 +295,7 @@ class Regularizer {
   /// The valid pieces as a soup: input vertices keep their doubles, new
   /// points are rounded to the nearest double. Input triangles come first,
   /// then sub-triangles, by triangle.
-  Soup output(std::vector<std::size_t>& source, std::vector<char>& made) const {
+  Soup output(std::vector<std::size_t>& source, std::vector<char>& made) {
     Soup out;
     std::vector<std::int64_t> id(points_.size(), -1);
     std::vector<std::pair<Index, Index>> fresh;  // (output point, new point) to round
@@ -308,9 +316,8 @@ class Regularizer {
       out.add_triangle(f[0], f[1], f[2]);
       source.push_back(p.source);
     }
-    // each an exact rounding (a rational's division): in parallel
-    tbb::parallel_for(std::size_t(0), fresh.size(),
-                      [&](std::size_t n) { out.points[fresh[n].first] = nearest_point3d(points_[fresh[n].second]); });
+    rounding_.wait();  // (started by run())
+    for (const auto& [i, n] : fresh) out.points[i] = rounded_[n - soup_.points.size()];
     return out;
   }
 
@@ -347,6 +354,7 @@ class Regularizer {
   }
 
   std::size_t new_points() const { return points_.size() - soup_.points.size(); }
+  ~Regularizer() { rounding_.wait(); }
   double seconds_intersections = 0;
 
  private:
@@ -1435,6 +1443,8 @@ class Regularizer {
   std::vector<char> river_done_;  // by edge (its first in edge_uses_): an intersection curve's, all classified
   std::vector<char> zero_area_;                                         // per input face (§3.1)
   std::vector<Index> roots_;  // per input face: the root of its cluster (coplanar overlaps, joined)
+  tbb::task_group rounding_;        // run() -> output(): the new points rounded
+  std::vector<Point3d> rounded_;    // per new point (after the input's): its nearest double
   std::unordered_map<Index, std::vector<Index>> members_;              // cluster root -> its faces (2 or more)
 
   InputTriangles triangles_;
