@@ -91,12 +91,6 @@ class KeyMap {
 
   std::size_t size() const { return size_; }
 
-  /// Asks the cache for the slot where a lookup of `key` starts (a hint:
-  /// lookups of several keys then wait for memory once, not in turn).
-  void prefetch(std::uint64_t key) const {
-    if (!slots_.empty()) __builtin_prefetch(&slots_[home(key)]);
-  }
-
  private:
   struct Slot {
     std::uint64_t key = kFree;

@@ -191,7 +191,7 @@ std::array<int, 2> kept_axes(int k) { return {(k + 1) % 3, (k + 2) % 3}; }
 class Regularizer {
  public:
   Regularizer(const Soup& soup, const std::vector<FacePair>& pairs, const Report& report, RegularizeReport& r)
-      : soup_(soup), r_(r), partners_(soup.face_count()), split_(soup.face_count(), 0),
+      : soup_(soup), r_(r), partners_(soup.face_count()),
         registered_(soup.points.size(), 0), not_generic_(soup.face_count(), 0) {
     points_.reserve(soup.points.size());
     for (const Point3d& p : soup.points) points_.emplace_back(p[0], p[1], p[2]);
@@ -277,12 +277,10 @@ class Regularizer {
       for (Index q = base_[s]; q < base_[s + 1] && !reached; ++q) reached = state(q) != kUnvisited;
       if (!reached) r_.split_unreached += plans_[s].cluster.size();
     }
-    for (std::size_t f = 0; f < faces; ++f) {
-      if (observer && f % 4096 == 0) observer->progress(0.5 + 0.5 * double(f) / double(faces));
-      if (partners_[f].empty()) continue;
-      const Index s = slot_[root(Index(f))];
-      for (Index q = base_[s]; q < base_[s + 1]; ++q)
-        if (state(q) == kUnvisited) seed(q);
+    // (sub-triangles by slot: their triangles' clusters by least member)
+    for (Index q = Index(faces); q < pieces_.size(); ++q) {
+      if (observer && q % 4096 == 0) observer->progress(0.5 + 0.5 * double(q - faces) / double(pieces_.size() - faces));
+      if (state(q) == kUnvisited) seed(q);
     }
     // each piece's state, its patch's
     tbb::parallel_for(std::size_t(0), pieces_.size(), [&](std::size_t q) {
@@ -333,7 +331,7 @@ class Regularizer {
     }
     for (std::size_t f = 0; f < faces; ++f) {
       if (!has_valid[f]) ++r_.invalid;
-      else if (split_[f]) ++r_.partially_valid;
+      else if (!partners_[f].empty()) ++r_.partially_valid;  // (split)
       else ++r_.valid;
     }
     // components through shared edges
@@ -734,8 +732,7 @@ class Regularizer {
   // only: run for every intersecting triangle, on the other cores while
   // planning goes on, before the growth (the growth reaches all of them
   // anyway). commit_all() turns every result into pieces, in parallel, and
-  // sorts their edges into one lookup; the growth only reads them and
-  // marks the triangles it reaches (split()), whose order output() keeps.
+  // sorts their edges into one lookup; the growth only reads them.
 
   /// A segment of a triangle alone in its plane (its intersection with a
   /// partner) from a to b through the crossings on it, in order.
@@ -1082,10 +1079,7 @@ class Regularizer {
     });
     for (std::size_t f = 0; f < faces; ++f)
       if (!partners_[f].empty()) pieces_[f].alive = false;  // its pieces take its place
-    for (std::size_t s = 0; s < slots; ++s) {
-      for (Index m : plans_[s].cluster) split_[m] = 1;
-      r_.triangles_split += plans_[s].cluster.size();
-    }
+    for (std::size_t s = 0; s < slots; ++s) r_.triangles_split += plans_[s].cluster.size();
     r_.sub_triangles += base_[slots] - faces;
     triangulated_ = {};
     tbb::parallel_sort(edge_uses_.begin(), edge_uses_.end());
@@ -1393,7 +1387,7 @@ class Regularizer {
   KeyMap<Head> dedup_;
   std::vector<Index> same_hash_;
   std::vector<std::vector<Index>> partners_;  // per input face: the faces it intersects
-  std::vector<char> split_, registered_;
+  std::vector<char> registered_;
   std::vector<char> not_generic_;  // per input face: a segment of it is not generic_segment()'s
   std::vector<Index> slot_;                // per cluster root: its plan and triangulation
   std::vector<Plan> plans_;
