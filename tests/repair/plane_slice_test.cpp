@@ -5,6 +5,7 @@
 #include <cmath>
 #include <algorithm>
 #include <map>
+#include <random>
 #include <set>
 
 #include "polyheal/inspect/exact_predicates.h"
@@ -250,4 +251,73 @@ TEST_CASE("rational_orientation: CGAL's answers, exactly collinear points includ
   CHECK(seen[CGAL::COLLINEAR] >= 1800);  // each `on` (p != q almost surely)
   CHECK(seen[CGAL::LEFT_TURN] >= 1800);
   CHECK(seen[CGAL::RIGHT_TURN] >= 1800);
+}
+
+// The regularizer's new points are kept as homogeneous coordinates
+// (detail::lazy_point): their intervals must be those CGAL makes of the
+// reduced rationals, bit for bit (the same filter decisions), their exact
+// values the rationals, their nearest doubles the rationals' nearest, and
+// the orientation of projected points on the integers CGAL's orientation on
+// the rationals — on points where lines through doubles cross planes
+// through doubles (the regularizer's crossing points), and where three
+// such planes meet.
+TEST_CASE("lazy_point: the homogeneous points' intervals, values, roundings and orientations are the rationals'",
+          "[repair]") {
+  using EPoint = Kernel::Point_3;
+  using Q = CGAL::Simple_cartesian<mpq_class>;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> coordinate(-100.0, 100.0);
+  auto random_point = [&] { return Point3d{coordinate(rng), coordinate(rng), coordinate(rng)}; };
+  std::vector<detail::Homogeneous> points;
+  while (points.size() < 3000) {
+    const detail::Triangle3d t{random_point(), random_point(), random_point()};
+    detail::Homogeneous h;
+    if (points.size() % 3 == 2) {
+      const detail::Triangle3d u{random_point(), random_point(), random_point()};
+      if (detail::planes_meet_exactly(t, u, {random_point(), random_point(), random_point()}, h) == detail::Meeting::point)
+        points.push_back(h);
+    } else if (detail::line_meets_plane(random_point(), random_point(), t, h) == detail::Meeting::point) {
+      points.push_back(h);
+    }
+  }
+  std::size_t inexact = 0;
+  std::vector<Q::Point_2> projected;
+  std::vector<detail::Row2> rows;
+  for (const detail::Homogeneous& h : points) {
+    const EPoint lazy = detail::lazy_point<EPoint>(h), reduced = detail::leaf_point<EPoint>(h);
+    REQUIRE(detail::homogeneous_of<EPoint, 3>(lazy) != nullptr);
+    CHECK(detail::homogeneous_of<EPoint, 3>(reduced) == nullptr);
+    const auto &a = lazy.approx(), &b = reduced.approx();
+    const std::array<mpq_class, 3> u = detail::unreduced(std::array<detail::Z, 3>{h.num.x(), h.num.y(), h.num.z()}, h.den);
+    for (int c = 0; c < 3; ++c) {
+      REQUIRE(a[c].inf() == b[c].inf());
+      REQUIRE(a[c].sup() == b[c].sup());
+      inexact += !a[c].is_point();
+      REQUIRE(nearest_double_of(u[c]) == nearest_double_of(reduced.exact()[c]));
+    }
+    REQUIRE(lazy.exact() == reduced.exact());
+    projected.emplace_back(reduced.exact().x(), reduced.exact().y());
+    rows.push_back({h.num.x(), h.num.y(), h.den});
+  }
+  CHECK(inexact > 8000);  // the case at stake: values between two doubles
+  // Orientations of three projected points: any three, and three exactly
+  // collinear (a point of the line through two others: a row that is a sum
+  // of multiples of theirs), as the points of one intersection segment are.
+  std::map<CGAL::Orientation, int> seen;
+  for (std::size_t i = 0; i + 2 < rows.size(); i += 3) {
+    const detail::Row2 &p = rows[i], &q = rows[i + 1];
+    const detail::Row2 on{p[0] * detail::Z(3) + q[0] * detail::Z(-5), p[1] * detail::Z(3) + q[1] * detail::Z(-5),
+                          p[2] * detail::Z(3) + q[2] * detail::Z(-5)};
+    if (CGAL::sign(on[2]) == CGAL::ZERO) continue;
+    const Q::Point_2 on_q(mpq_class(on[0]) / mpq_class(on[2]), mpq_class(on[1]) / mpq_class(on[2]));
+    for (const auto& [r, rq] : {std::pair{rows[i + 2], projected[i + 2]}, std::pair{on, on_q}}) {
+      const CGAL::Orientation expected = CGAL::orientation(projected[i], projected[i + 1], rq);
+      REQUIRE(detail::homogeneous_orientation(p, q, r) == expected);
+      REQUIRE(detail::homogeneous_orientation(q, r, p) == expected);
+      ++seen[expected];
+    }
+  }
+  CHECK(seen[CGAL::COLLINEAR] >= 900);
+  CHECK(seen[CGAL::LEFT_TURN] >= 200);
+  CHECK(seen[CGAL::RIGHT_TURN] >= 200);
 }

@@ -232,6 +232,8 @@ static_assert(std::is_same_v<Kernel::Exact_kernel::FT, mpq_class>);
 
 }  // namespace
 
+double nearest_double_of(const mpq_class& q) { return round_exact(q); }
+
 // CGAL::to_double on a lazy number is only guaranteed to a relative
 // precision of 1e-5; this is the nearest double.
 double nearest_double(const Kernel::FT& x) {

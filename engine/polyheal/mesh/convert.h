@@ -62,6 +62,10 @@ Point3d nearest_point3d(const Point& p);
 Point nearest_double_point(const Point& p);
 /// One exact number rounded to the nearest double (ties to even).
 double nearest_double(const Kernel::FT& x);
+/// A rational rounded to the nearest double (ties to even), as above. `q`
+/// may be left unreduced: MPFR divides its numerator by its denominator as
+/// they are (exact points kept as homogeneous coordinates need no gcd).
+double nearest_double_of(const mpq_class& q);
 
 /// The mesh as a soup, each exact coordinate rounded to the nearest double
 /// (ties to even; certify after rounding: check the result, not the mesh).

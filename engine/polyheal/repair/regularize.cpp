@@ -65,11 +65,13 @@ struct VertexInfo {
 };
 /// Epeck for the constrained triangulations, with an orientation test that
 /// decides as Epeck's does (the doubles' static filter, then intervals)
-/// and, where those fail, on the exact rationals without a gcd
-/// (detail::rational_orientation): the triangulations' exact tests (the
-/// points of one segment are exactly collinear) spent most of their time in
-/// mpq's gcds, a tenth of regularize's CPU time on a raw offset. Same
-/// answers, so the same triangulations.
+/// and, where those fail, without a gcd: on the homogeneous coordinates the
+/// points were projected from (detail::homogeneous_orientation: the new
+/// points are made homogeneous, their rationals only when asked), else on
+/// the exact rationals (detail::rational_orientation). The triangulations'
+/// exact tests (the points of one segment are exactly collinear) spent most
+/// of their time in mpq's gcds, a tenth of regularize's CPU time on a raw
+/// offset. Same answers, so the same triangulations.
 struct CdtTraits : K {
   struct Orientation_2 {
     using result_type = CGAL::Orientation;
@@ -84,9 +86,23 @@ struct CdtTraits : K {
         const CGAL::Uncertain<CGAL::Orientation> o = CGAL::orientationC2(a.x(), a.y(), b.x(), b.y(), c.x(), c.y());
         if (CGAL::is_certain(o)) return CGAL::get_certain(o);
       }
+      if (const auto rp = row(p), rq = row(q), rr = row(r); rp && rq && rr)
+        return detail::homogeneous_orientation(*rp, *rq, *rr);
       static_assert(std::is_same_v<K::Exact_kernel::FT, mpq_class>);
       const auto &x = p.exact(), &y = q.exact(), &z = r.exact();
       return detail::rational_orientation({x.x(), x.y()}, {y.x(), y.y()}, {z.x(), z.y()});
+    }
+
+   private:
+    /// p as homogeneous coordinates: its doubles over 1, or the form it was
+    /// projected from (exact_proj); none for other points (constructed by
+    /// the triangulation).
+    static std::optional<detail::Row2> row(const K::Point_2& p) {
+      const auto& a = p.approx();
+      if (a.x().is_point() && a.y().is_point())
+        return detail::Row2{detail::Z(a.x().inf()), detail::Z(a.y().inf()), detail::Z(1)};
+      if (const auto* h = detail::homogeneous_of<K::Point_2, 2>(p)) return detail::Row2{h->num[0], h->num[1], h->den};
+      return std::nullopt;
     }
   };
   Orientation_2 orientation_2_object() const { return {}; }
@@ -151,12 +167,27 @@ std::pair<int, double> dominant_axis(const EVector& v) {
   return {k, CGAL::to_double(v[k])};
 }
 
-/// num / den as a point known exactly (detail::leaf_point): nothing to
-/// evaluate when a filter fails on it or it is rounded (on a raw offset of
-/// 125k triangles, evaluating lazy trees of the same points was ~15% of
+/// num / den as a point known exactly (detail::lazy_point): no lazy tree
+/// to evaluate when a filter fails on it (on a raw offset of 125k
+/// triangles, evaluating lazy trees of the same points was ~15% of
 /// regularize; a point built from three exact coordinates, a node, was a
-/// fifth of the triangulations').
-EPoint exact_point(const detail::Homogeneous& h) { return detail::leaf_point<EPoint>(h); }
+/// fifth of the triangulations'), and its rationals made only when a test
+/// needs them: the triangulations' orientations, the rounding and the
+/// hashing take the homogeneous form (the rationals' gcds were a third of
+/// constructing the crossing points, Hand1's raw offset).
+EPoint exact_point(const detail::Homogeneous& h) { return detail::lazy_point<EPoint>(h); }
+
+/// p's nearest doubles (nearest_point3d), from its homogeneous form where
+/// it has one: MPFR divides the unreduced rationals (no gcd).
+Point3d nearest(const EPoint& p) {
+  const auto* h = detail::homogeneous_of<EPoint, 3>(p);
+  if (!h) return nearest_point3d(p);
+  const auto& a = p.approx();
+  const std::array<mpq_class, 3> u = detail::unreduced(h->num, h->den);
+  Point3d out;
+  for (int c = 0; c < 3; ++c) out[c] = a[c].is_point() ? a[c].inf() : nearest_double_of(u[c]);
+  return out;
+}
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -261,7 +292,7 @@ class Regularizer {
       const std::size_t first = soup_.points.size();
       rounded_.resize(points_.size() - first);
       tbb::parallel_for(std::size_t(0), rounded_.size(),
-                        [&](std::size_t n) { rounded_[n] = nearest_point3d(points_[first + n]); });
+                        [&](std::size_t n) { rounded_[n] = nearest(points_[first + n]); });
     });
     // Seeds among the intersection-free triangles first (no sub-triangulation
     // needed to classify them), then among the sub-triangles of what is left.
@@ -526,10 +557,12 @@ class Regularizer {
   /// Its intervals are p's own (tight: an exact value's, as a leaf's are and
   /// a node's become once evaluated), not computed again from the rationals.
   static K::Point_2 exact_proj(const EPoint& p, int i, int j) {
-    if (const auto& a = p.approx(); a[i].is_point() && a[j].is_point()) return K::Point_2(a[i].inf(), a[j].inf());
-    const auto& e = p.exact();
     const auto& a = p.approx();
+    if (a[i].is_point() && a[j].is_point()) return K::Point_2(a[i].inf(), a[j].inf());
     using Rep = K::Point_2::Rep;
+    if (const auto* h = detail::homogeneous_of<EPoint, 3>(p))  // the projection's homogeneous form: no rationals
+      return K::Point_2(Rep(new detail::HomogeneousRep<Rep, 2>(Rep::AT(a[i], a[j]), {{h->num[i], h->num[j]}, h->den})));
+    const auto& e = p.exact();
     return K::Point_2(Rep(new CGAL::Lazy_rep_0<Rep::AT, Rep::ET, K::E2A>(Rep::AT(a[i], a[j]), Rep::ET(e[i], e[j]))));
   }
 
@@ -1343,18 +1376,19 @@ class Regularizer {
   }
 
   /// A hash of p's exact value (equal points, equal hashes): of its
-  /// coordinates where they are doubles, else of their exact rationals
-  /// truncated to doubles. The points here are known exactly (leaves: no
-  /// evaluation) but for the few that CGAL's intersection constructed.
+  /// coordinates where they are doubles, else of their exact values
+  /// truncated to doubles, read from tight intervals. The points here are
+  /// homogeneous (lazy_point: tight intervals, no rationals made) but for
+  /// the few that CGAL's intersection constructed (evaluated here).
   static std::uint64_t value_hash(const EPoint& p) {
+    if (const auto& a = p.approx(); !(a.x().is_point() && a.y().is_point() && a.z().is_point()) &&
+                                    !detail::homogeneous_of<EPoint, 3>(p))
+      (void)p.exact();  // a node's intervals become its exact value's (tight) once evaluated
+    // Tight intervals: a double, or the two doubles either side of the
+    // value; the end nearer zero is the value truncated (as mpq_get_d).
     const auto& a = p.approx();
     Point3d key;
-    if (a.x().is_point() && a.y().is_point() && a.z().is_point()) {
-      key = {a.x().inf(), a.y().inf(), a.z().inf()};
-    } else {
-      const auto& e = p.exact();
-      key = {mpq_get_d(e.x().get_mpq_t()), mpq_get_d(e.y().get_mpq_t()), mpq_get_d(e.z().get_mpq_t())};
-    }
+    for (int c = 0; c < 3; ++c) key[c] = a[c].is_point() || a[c].inf() >= 0 ? a[c].inf() : a[c].sup();
     return hash_points(&key, 1);
   }
 

@@ -8,12 +8,14 @@
 // CGAL's Mpzf and kernel: include only from the CGAL-heavy translation units.
 #pragma once
 
+#include <CGAL/Lazy.h>
 #include <CGAL/Mpzf.h>
 #include <CGAL/Simple_cartesian.h>
 #include <gmpxx.h>
 
 #include <array>
 #include <functional>
+#include <utility>
 
 #include "polyheal/repair/detail/plane_meet.h"
 
@@ -44,6 +46,92 @@ EpeckPoint leaf_point(const Homogeneous& h) {
   return EpeckPoint(typename EpeckPoint::Rep(Exact(c[0], c[1], c[2])));
 }
 
+/// num / den's coordinates as rationals left unreduced: numerator and
+/// denominator as the ring operations left them (no gcd), the denominator
+/// positive. Only for MPFR's correctly rounded conversions (mpfr_set_q
+/// divides the numerator by the denominator as they are: CGAL::to_interval,
+/// nearest_double_of); never for mpq arithmetic, which needs canonical form.
+template <std::size_t D>
+std::array<mpq_class, D> unreduced(const std::array<Z, D>& num, const Z& den) {
+  const mpq_class d(den);  // an integer times a power of two, canonical
+  std::array<mpq_class, D> out;
+  for (std::size_t c = 0; c < D; ++c) {
+    const mpq_class n(num[c]);
+    mpz_mul(out[c].get_num_mpz_t(), n.get_num_mpz_t(), d.get_den_mpz_t());
+    mpz_mul(out[c].get_den_mpz_t(), n.get_den_mpz_t(), d.get_num_mpz_t());
+    if (sgn(out[c].get_den()) < 0) {
+      mpz_neg(out[c].get_num_mpz_t(), out[c].get_num_mpz_t());
+      mpz_neg(out[c].get_den_mpz_t(), out[c].get_den_mpz_t());
+    }
+  }
+  return out;
+}
+
+/// A point of an Epeck kernel (Point_2 or Point_3) known as homogeneous
+/// coordinates num / den: a leaf of the lazy tree whose intervals are the
+/// tight ones of its exact value (CGAL::to_interval on the unreduced
+/// rationals: what E2A makes of the reduced ones, bit for bit), and whose
+/// exact rationals — a gcd per coordinate — are made only when a filter
+/// fails on it. Tests that can take the homogeneous form (orientation_2 of
+/// projected points, rounding, hashing) read it with homogeneous_of().
+template <class Lazy, int D>
+class HomogeneousRep final : public Lazy::Self_rep {
+  using Base = typename Lazy::Self_rep;
+
+ public:
+  /// num[0..D) / den.
+  struct Form {
+    std::array<Z, D> num;
+    Z den;
+  };
+  HomogeneousRep(const typename Lazy::AT& approx, Form form) : Base(approx), form_(std::move(form)) {}
+  const Form& form() const { return form_; }
+  void update_exact() const override {
+    const mpq_class den(form_.den);
+    std::array<mpq_class, D> c;
+    for (int k = 0; k < D; ++k) c[k] = mpq_class(form_.num[k]) / den;
+    typename Lazy::ET e = make_exact(c, std::make_index_sequence<D>());
+    auto* p = new typename Base::Indirect(std::move(e));
+    this->keep_at(p);
+    this->set_ptr(p);
+  }
+
+ private:
+  template <std::size_t... I>
+  static typename Lazy::ET make_exact(const std::array<mpq_class, D>& c, std::index_sequence<I...>) {
+    return typename Lazy::ET(c[I]...);
+  }
+  Form form_;
+};
+
+/// h as an Epeck point (HomogeneousRep: exact rationals on demand).
+template <class EpeckPoint>
+EpeckPoint lazy_point(const Homogeneous& h) {
+  using Lazy = typename EpeckPoint::Rep;
+  using Rep = HomogeneousRep<Lazy, 3>;
+  typename Rep::Form form{{h.num.x(), h.num.y(), h.num.z()}, h.den};
+  const std::array<mpq_class, 3> u = unreduced(form.num, form.den);
+  const typename Lazy::AT approx(CGAL::to_interval(u[0]), CGAL::to_interval(u[1]), CGAL::to_interval(u[2]));
+  return EpeckPoint(Lazy(new Rep(approx, std::move(form))));
+}
+
+/// The rep a lazy object's handle points to (CGAL::Handle keeps the
+/// pointer protected: a pointer to member formed through a derived class).
+struct HandleRep : CGAL::Handle {
+  static const CGAL::Rep* of(const CGAL::Handle& h) {
+    CGAL::Rep* CGAL::Handle::*const ptr = &HandleRep::PTR;
+    return h.*ptr;
+  }
+};
+
+/// The homogeneous form p was made from (lazy_point, or projected from
+/// one), or null.
+template <class EpeckPoint, int D>
+const typename HomogeneousRep<typename EpeckPoint::Rep, D>::Form* homogeneous_of(const EpeckPoint& p) {
+  const auto* rep = dynamic_cast<const HomogeneousRep<typename EpeckPoint::Rep, D>*>(HandleRep::of(p));
+  return rep ? &rep->form() : nullptr;
+}
+
 inline Z3 exact_vector(const Point3d& q) { return {Z(q[0]), Z(q[1]), Z(q[2])}; }
 
 /// The orientation of the 2D points p, q, r with exact rational coordinates
@@ -65,6 +153,18 @@ inline CGAL::Orientation rational_orientation(const Rational2& p, const Rational
   const mpz_class right = numerator(qy, py) * numerator(rx, px) * qx.get_den() * ry.get_den();
   const int c = cmp(left, right);
   return c > 0 ? CGAL::LEFT_TURN : c < 0 ? CGAL::RIGHT_TURN : CGAL::COLLINEAR;
+}
+
+/// The orientation of the 2D points (x / w, y / w) given as integer rows
+/// (x, y, w), w != 0: the sign of the rows' determinant times that of
+/// w1 w2 w3 (each row is its point's (x / w, y / w, 1) scaled by w). No
+/// rational, no gcd: for points kept homogeneous (HomogeneousRep).
+using Row2 = std::array<Z, 3>;
+inline CGAL::Orientation homogeneous_orientation(const Row2& a, const Row2& b, const Row2& c) {
+  const Z det = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+                a[2] * (b[0] * c[1] - b[1] * c[0]);
+  const int s = int(CGAL::sign(det)) * int(CGAL::sign(a[2])) * int(CGAL::sign(b[2])) * int(CGAL::sign(c[2]));
+  return s > 0 ? CGAL::LEFT_TURN : s < 0 ? CGAL::RIGHT_TURN : CGAL::COLLINEAR;
 }
 
 /// An integer as an Mpzf. (CGAL 5.5's Mpzf(mpz_class) drops the sign and
