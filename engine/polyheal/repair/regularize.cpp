@@ -915,7 +915,7 @@ class Regularizer {
       const Ends seg = segment(t, u);
       if (seg.size() == 1) plan.lone.push_back(seg[0]);
       if (seg.size() != 2 || seg[0] == seg[1]) continue;
-      Seg x{seg[0], seg[1], u, proj(points_[seg[0]], i, j), proj(points_[seg[1]], i, j), {}, {}};
+      Seg x{seg[0], seg[1], u, exact_proj(points_[seg[0]], i, j), exact_proj(points_[seg[1]], i, j), {}, {}};
       x.box = x.pa.bbox() + x.pb.bbox();
       segs.push_back(std::move(x));
     }
@@ -924,9 +924,10 @@ class Regularizer {
         Seg &p = segs[x], &q = segs[y];
         if (p.a == q.a || p.a == q.b || p.b == q.a || p.b == q.b) continue;
         if (!CGAL::do_overlap(p.box, q.box)) continue;
-        const CGAL::Orientation o1 = CGAL::orientation(p.pa, p.pb, q.pa), o2 = CGAL::orientation(p.pa, p.pb, q.pb);
+        const CdtTraits::Orientation_2 orientation;
+        const CGAL::Orientation o1 = orientation(p.pa, p.pb, q.pa), o2 = orientation(p.pa, p.pb, q.pb);
         if (o1 == CGAL::COLLINEAR || o2 == CGAL::COLLINEAR || o1 == o2) continue;
-        const CGAL::Orientation o3 = CGAL::orientation(q.pa, q.pb, p.pa), o4 = CGAL::orientation(q.pa, q.pb, p.pb);
+        const CGAL::Orientation o3 = orientation(q.pa, q.pb, p.pa), o4 = orientation(q.pa, q.pb, p.pb);
         if (o3 == CGAL::COLLINEAR || o4 == CGAL::COLLINEAR || o3 == o4) continue;
         const std::optional<Index> id = triple_point(t, p.u, q.u);
         if (!id) continue;
@@ -934,15 +935,44 @@ class Regularizer {
         q.on.push_back(*id);
       }
     for (Seg& x : segs) {
-      // a to b through its crossings, ordered along the axis it spans most
-      const bool along_x = CGAL::abs(x.pb.x() - x.pa.x()) >= CGAL::abs(x.pb.y() - x.pa.y());
-      auto key = [&](Index id) { return along_x ? points_[id][i] : points_[id][j]; };
-      const bool up = along_x ? x.pa.x() < x.pb.x() : x.pa.y() < x.pb.y();
+      // a to b through its crossings, ordered along an axis the segment
+      // spans (any such axis gives the one order along a line)
       std::sort(x.on.begin(), x.on.end());
       x.on.erase(std::unique(x.on.begin(), x.on.end()), x.on.end());
-      std::sort(x.on.begin(), x.on.end(), [&](Index m, Index n) { return up ? key(m) < key(n) : key(n) < key(m); });
+      if (x.on.size() > 1) {
+        const auto [axis, up] = spanned_axis(x.a, x.b, i, j);
+        std::sort(x.on.begin(), x.on.end(), [&](Index m, Index n) { return up ? less_along(m, n, axis) : less_along(n, m, axis); });
+      }
       plan.segs.push_back({x.a, x.b, std::move(x.on)});
     }
+  }
+
+  /// Whether point m's coordinate `axis` is less than point n's, exactly:
+  /// by their intervals (tight: disjoint unless the values are within a
+  /// double's step) where they decide, else by their rationals. No lazy
+  /// number is made (points_[m][axis] is a construction of its own).
+  bool less_along(Index m, Index n, int axis) const {
+    const auto &x = points_[m].approx()[axis], &y = points_[n].approx()[axis];
+    if (x.sup() < y.inf()) return true;
+    if (x.inf() >= y.sup()) return false;
+    return points_[m].exact()[axis] < points_[n].exact()[axis];
+  }
+
+  /// An axis of (i, j) along which a and b differ (a != b in the plane
+  /// projected along the third), and whether b is above a on it: the one
+  /// where they are farther apart, as far as their intervals tell.
+  std::pair<int, bool> spanned_axis(Index a, Index b, int i, int j) const {
+    const auto &pa = points_[a].approx(), &pb = points_[b].approx();
+    auto apart = [&](int c) { return pa[c].sup() < pb[c].inf() || pb[c].sup() < pa[c].inf(); };
+    auto gap = [&](int c) { return std::abs(0.5 * (pb[c].inf() + pb[c].sup()) - 0.5 * (pa[c].inf() + pa[c].sup())); };
+    int axis = -1;
+    if (apart(i) && (!apart(j) || gap(i) >= gap(j))) axis = i;
+    else if (apart(j)) axis = j;
+    if (axis >= 0) return {axis, pa[axis].sup() < pb[axis].inf()};
+    // within a double's step on both axes: exactly (at least one differs)
+    const auto &ea = points_[a].exact(), &eb = points_[b].exact();
+    axis = ea[i] != eb[i] ? i : j;
+    return {axis, ea[axis] < eb[axis]};
   }
 
   /// The constraint a-b. Where a-b is an edge already it is only marked:
@@ -1278,9 +1308,7 @@ class Regularizer {
       // along the edge from corner e: by the coordinate that changes most
       const auto [axis, along] = dominant_axis(points_[fv[(e + 1) % 3]] - points_[fv[e]]);
       const bool up = along > 0;
-      std::sort(pts.begin(), pts.end(), [&](Index x, Index y) {
-        return up ? points_[x][axis] < points_[y][axis] : points_[y][axis] < points_[x][axis];
-      });
+      std::sort(pts.begin(), pts.end(), [&](Index x, Index y) { return up ? less_along(x, y, axis) : less_along(y, x, axis); });
       CDT::Vertex_handle prev = corner[e];
       const CDT::Vertex_handle end = corner[(e + 1) % 3];
       for (Index id : pts) {
