@@ -239,8 +239,9 @@ void self_pairs(std::vector<const Box*>& boxes, const Callback& callback) {
 /// entirely below the split value), R (entirely above) and S (straddling
 /// it). An L box and an R box cannot overlap, so
 ///   pairs(X) = pairs(L) + pairs(R) + pairs(S) + S x L + S x R,
-/// with pairs(L), pairs(R) split again down to kLeaf boxes (the first
-/// `depth` levels' halves in parallel), and only the L and R boxes
+/// with pairs(L), pairs(R) split again down to kLeaf boxes (with
+/// `parallel`, the halves at every level as tasks: the two cores share the
+/// parts to the end), and only the L and R boxes
 /// reaching S's range along the axis paired with S. The parts are swept
 /// (sweep_self, sweep_cross): on a surface of small faces, a part's boxes
 /// overlap few others along its sweep axis (Hand1's raw offset regularized,
@@ -252,14 +253,14 @@ void self_pairs(std::vector<const Box*>& boxes, const Callback& callback) {
 /// re-sorted), the parts are disjoint in space, so the work does not grow
 /// with the split.
 template <class Callback>
-void box_pairs(std::vector<const Box*>& boxes, const Callback& callback, int depth, bool split = false) {
+void box_pairs(std::vector<const Box*>& boxes, const Callback& callback, bool parallel, bool split = false) {
   // Where no split is made at all (fewer than 20000 boxes, or too many
-  // straddling), the pairs are tested in parallel all the same when `depth`
-  // asks for threads: the boxes are paired first, in batches, and each
+  // straddling), the pairs are tested in parallel all the same when
+  // `parallel`: the boxes are paired first, in batches, and each
   // batch's tests are shared out (a small surface of costly pairs — the
   // large coplanar fans of a coarsened one — is all narrow phase).
   auto unsplit = [&](std::vector<const Box*>& v) {
-    if (depth == 0 || split) return self_pairs(v, callback);
+    if (!parallel || split) return self_pairs(v, callback);
     constexpr std::size_t kBatch = std::size_t(1) << 16;
     std::vector<std::pair<const Box*, const Box*>> batch;
     auto test = [&] {
@@ -273,7 +274,7 @@ void box_pairs(std::vector<const Box*>& boxes, const Callback& callback, int dep
     });
     test();
   };
-  if (boxes.size() <= kLeaf || (!split && depth > 0 && boxes.size() < 20000)) return unsplit(boxes);
+  if (boxes.size() <= kLeaf || (!split && parallel && boxes.size() < 20000)) return unsplit(boxes);
   double lo[3], hi[3];
   for (int a = 0; a < 3; ++a) {
     lo[a] = std::numeric_limits<double>::infinity();
@@ -319,14 +320,14 @@ void box_pairs(std::vector<const Box*>& boxes, const Callback& callback, int dep
   };
   auto lower = [&] {
     cross(straddling, below);
-    box_pairs(below, callback, std::max(depth - 1, 0), true);
+    box_pairs(below, callback, parallel, true);
   };
   auto upper = [&] {
     cross(straddling_copy, above);
     self_pairs(straddling_copy, callback);
-    box_pairs(above, callback, std::max(depth - 1, 0), true);
+    box_pairs(above, callback, parallel, true);
   };
-  if (depth > 0) {
+  if (parallel) {
     tbb::parallel_invoke(lower, upper);
   } else {
     lower();
@@ -463,7 +464,7 @@ void scan(const Soup& s, const SelfIntersectionOptions& o, Found found, const st
           [&](const Box* x, const Box* y) {
             if (flagged_face(x) || flagged_face(y)) callback(x, y);
           },
-          o.parallel ? 2 : 0);
+          o.parallel);
       return;
     }
     flagged_pairs(
@@ -474,7 +475,7 @@ void scan(const Soup& s, const SelfIntersectionOptions& o, Found found, const st
         o.parallel ? 2 : 0);
     return;
   }
-  box_pairs(pointers, callback, o.parallel ? 2 : 0);  // 2 levels: 4 leaves, enough to balance 2 cores
+  box_pairs(pointers, callback, o.parallel);
 }
 
 }  // namespace
@@ -634,7 +635,7 @@ std::vector<EdgeNearEdge> find_edges_near_edges(const Soup& soup, const std::vec
   } else {
     // Most meeting boxes are of edges sharing a vertex (always meeting): the
     // broad phase is the cost, so it runs in parallel as scan()'s does.
-    box_pairs(pointers, near, parallel ? 2 : 0);
+    box_pairs(pointers, near, parallel);
   }
   for (const auto& v : local) out.insert(out.end(), v.begin(), v.end());
   std::sort(out.begin(), out.end());
