@@ -224,8 +224,8 @@ if want regularize; then
     reg_inputs+=("$work/knot$((n / 1000))k_r1.2.off")
   done
   # raw offsets (`polyheal offset --raw`): what regularize is for
-  raw_offset() {  # raw_offset IN D NAME
-    "$b/polyheal" offset --raw --overwrite "$1" -d "$2" -o "$work/$3" >/dev/null 2>&1 || true
+  raw_offset() {  # raw_offset IN D NAME [OFFSET OPTIONS...]
+    "$b/polyheal" offset --raw --overwrite "$1" -d "$2" -o "$work/$3" "${@:4}" >/dev/null 2>&1 || true
     [ -f "$work/$3" ] && reg_inputs+=("$work/$3")
   }
   printf 'OFF\n8 12 0\n0 0 0\n2 0 0\n2 2 0\n0 2 0\n0 0 2\n2 0 2\n2 2 2\n0 2 2\n3 0 2 1\n3 0 3 2\n3 4 5 6\n3 4 6 7\n3 0 1 5\n3 0 5 4\n3 1 2 6\n3 1 6 5\n3 2 3 7\n3 2 7 6\n3 3 0 4\n3 3 4 7\n' > "$work/cube2.off"
@@ -242,6 +242,9 @@ if want regularize; then
   raw_offset "$corpus/vhacd__rocker-arm.off" 0.0233 raw_offset_rocker-arm_+2pc.off
   raw_offset "$corpus/vhacd__rocker-arm.off" -0.0233 raw_offset_rocker-arm_-2pc.off
   raw_offset "$corpus/vhacd__Hand1.off" 4.814 raw_offset_Hand1_+2pc.off
+  # the same at a finer chord tolerance (more strip and patch triangles):
+  # 155k triangles, issue 5's "150k-triangle raw offset"
+  raw_offset "$corpus/vhacd__Hand1.off" 4.814 raw_offset_Hand1_+2pc_tol0.6pc.off --tolerance 0.6%
   while IFS= read -r f; do reg_inputs+=("$corpus/$f"); done < <(awk -F'\t' 'NR > 1 && $11 > 0 && $16 == 0 {print $1}' "$corpus/MANIFEST.tsv")
   for f in "${reg_inputs[@]}"; do
     [ -f "$f" ] || continue
@@ -533,8 +536,9 @@ Closed meshes that overlap themselves or each other: the fixtures, generated
 torus-knot tubes whose radius makes them overlap (`polyheal_gen torus-knot --radius R`:
 0.9 overlaps where strands pass close, 1.2 and beyond also where the radius exceeds
 the curve's; 20k to 1M faces), raw offsets written by `polyheal offset --raw`
-(`raw_offset_*`: the input, the distance), and the corpus meshes with an exact
-self-intersection that are closed. On a raw offset both tools compute the union;
+(`raw_offset_*`: the input, the distance, and `tol` a chord tolerance other than
+the default 1% of it), and the corpus meshes with an exact self-intersection that
+are closed. On a raw offset both tools compute the union;
 `polyheal offset` also removes the fold pockets (see README), which this table's
 regularize column does not.
 "verdict": `polyheal check` on each written file (CERTIFIED CLEAN, or what is left).
