@@ -1,9 +1,11 @@
 // polyheal — where lines and planes through input doubles meet, exactly, as
 // homogeneous points: ring operations on the doubles' values (Mpzf, no
 // normalisation, no gcd), and one division per coordinate by whoever needs a
-// rational (regularize's exact points) or a double (rebuild's sharpening,
-// plane_meet.h). Cheaper than the same construction through Epeck's lazy
-// tree, whose exact evaluation normalises a rational at every step.
+// rational (degenerate's split points; regularize's exact points, kept
+// homogeneous in Epeck's lazy tree until a filter fails: lazy_point) or a
+// double (rebuild's sharpening, plane_meet.h). Cheaper than the same
+// construction through Epeck's lazy tree, whose exact evaluation normalises a
+// rational at every step.
 //
 // CGAL's Mpzf and kernel: include only from the CGAL-heavy translation units.
 #pragma once
