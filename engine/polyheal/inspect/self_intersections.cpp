@@ -117,21 +117,23 @@ struct Swept {
   const Box* box;
 };
 
-/// The axis along which the boxes overlap least: where their extents are
-/// smallest for the range they spread over (a surface of small faces is
-/// swept along its longest side; a flat region is never swept across).
-int sweep_axis(const std::vector<const Box*>& boxes) {
+/// The axis along which the boxes of `boxes` and `more` together overlap
+/// least: where their extents are smallest for the range they spread over
+/// (a surface of small faces is swept along its longest side; a flat region
+/// is never swept across).
+int sweep_axis(const std::vector<const Box*>& boxes, const std::vector<const Box*>& more = {}) {
   double lo[3], hi[3], extent[3] = {0, 0, 0};
   for (int a = 0; a < 3; ++a) {
     lo[a] = std::numeric_limits<double>::infinity();
     hi[a] = -lo[a];
   }
-  for (const Box* b : boxes)
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], b->min_coord(a));
-      hi[a] = std::max(hi[a], b->max_coord(a));
-      extent[a] += b->max_coord(a) - b->min_coord(a);
-    }
+  for (const std::vector<const Box*>* list : {&boxes, &more})
+    for (const Box* b : *list)
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], b->min_coord(a));
+        hi[a] = std::max(hi[a], b->max_coord(a));
+        extent[a] += b->max_coord(a) - b->min_coord(a);
+      }
   int axis = 0;
   double least = std::numeric_limits<double>::infinity();
   for (int a = 0; a < 3; ++a)
@@ -159,9 +161,10 @@ inline bool meet_across(const Swept& x, const Swept& y) {
   return x.lo1 <= y.hi1 && y.lo1 <= x.hi1 && x.lo2 <= y.hi2 && y.lo2 <= x.hi2;
 }
 
-/// The first of `w` (sorted) with lo > t.
-inline std::vector<Swept>::const_iterator first_above(const std::vector<Swept>& w, double t) {
-  return std::upper_bound(w.begin(), w.end(), t, [](double u, const Swept& y) { return u < y.lo; });
+using SweptIt = std::vector<Swept>::const_iterator;
+/// The first of [from, end) (sorted) with lo > t.
+inline SweptIt first_above(SweptIt from, SweptIt end, double t) {
+  return std::upper_bound(from, end, t, [](double u, const Swept& y) { return u < y.lo; });
 }
 
 /// Every overlapping pair of `boxes` (closed boxes, as CGAL's default),
@@ -176,7 +179,7 @@ bool sweep_self(const std::vector<const Box*>& boxes, const Callback& callback) 
   const std::vector<Swept> w = swept(boxes, sweep_axis(boxes));
   if (w.size() > kLeaf) {
     std::size_t tests = 0;
-    for (std::size_t i = 0; i < w.size(); ++i) tests += std::size_t(first_above(w, w[i].hi) - w.begin()) - i - 1;
+    for (std::size_t i = 0; i < w.size(); ++i) tests += std::size_t(first_above(w.begin(), w.end(), w[i].hi) - w.begin()) - i - 1;
     if (tests > kSweepBudget * w.size()) return false;
   }
   for (std::size_t i = 0; i < w.size(); ++i)
@@ -191,10 +194,7 @@ bool sweep_self(const std::vector<const Box*>& boxes, const Callback& callback) 
 /// their b box. False (nothing called) over kSweepBudget pairs a box.
 template <class Callback>
 bool sweep_cross(const std::vector<const Box*>& a, const std::vector<const Box*>& b, const Callback& callback) {
-  std::vector<const Box*> both(a);
-  both.insert(both.end(), b.begin(), b.end());
-  const int axis = sweep_axis(both);
-  std::vector<const Box*>().swap(both);
+  const int axis = sweep_axis(a, b);
   const std::vector<Swept> wa = swept(a, axis), wb = swept(b, axis);
   // [first, last) of the other list's boxes that start in x's range:
   // from x's lower bound on (`from_equal`), or strictly after it
@@ -204,8 +204,8 @@ bool sweep_cross(const std::vector<const Box*>& a, const std::vector<const Box*>
       const auto first =
           from_equal ? std::lower_bound(ys.begin(), ys.end(), xs[i].lo,
                                         [](const Swept& y, double u) { return y.lo < u; })
-                     : first_above(ys, xs[i].lo);
-      const auto last = std::upper_bound(first, ys.end(), xs[i].hi, [](double u, const Swept& y) { return u < y.lo; });
+                     : first_above(ys.begin(), ys.end(), xs[i].lo);
+      const auto last = first_above(first, ys.end(), xs[i].hi);
       r[i] = {std::size_t(first - ys.begin()), std::size_t(last - ys.begin())};
     }
     return r;
