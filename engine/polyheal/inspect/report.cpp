@@ -70,12 +70,16 @@ Report inspect(const Soup& input, const InspectOptions& o) {
   // Nesting (inward components only) needs a certified surface; in
   // parallel it is decided beside the self-intersection pass, before that
   // pass has certified anything, and kept only if it does (its serial
-  // tree building was most of a cavity-rich surface's last stretch).
+  // tree building was most of a cavity-rich surface's last stretch) — not
+  // when the caller's pairs say already that it will not (a rounding pass
+  // of regularize: the crank's raw offset, 15k pockets, 1.5 s).
+  const bool crossing = o.self_intersections && !weld.merged && !o.self_intersections->empty();
   Topology topo;
   std::optional<Nesting> nested;
   auto topology_and_shape_pass = [&] {
     topology_and_shape(soup, weld, o, r, topo);
-    if (o.parallel && r.inward_components > 0 && r.clean_but_for_crossings()) nested = nesting_of_welded(soup, topo);
+    if (o.parallel && !crossing && r.inward_components > 0 && r.clean_but_for_crossings())
+      nested = nesting_of_welded(soup, topo);
   };
   if (o.parallel) tbb::parallel_invoke(self_intersection_pass, topology_and_shape_pass);
   else {
