@@ -276,7 +276,6 @@ class Regularizer {
     });
     tbb::parallel_sort(face_edges_.begin(), face_edges_.end());
     link_untouched_edges();
-    for (int k = 0; k < 3; ++k) below_[k] = report.bbox_min[k] - (1.0 + std::abs(report.bbox_min[k]));
   }
 
   /// §3.3-3.6 with the generalised seeds: every piece ends valid, invalid,
@@ -294,6 +293,7 @@ class Regularizer {
       tbb::parallel_for(std::size_t(0), rounded_.size(),
                         [&](std::size_t n) { rounded_[n] = nearest(points_[first + n]); });
     });
+    cast_isolated();
     // Seeds among the intersection-free triangles first (no sub-triangulation
     // needed to classify them), then among the sub-triangles of what is left.
     for (std::size_t f = 0; f < faces; ++f) {
@@ -435,9 +435,40 @@ class Regularizer {
 
   void seed(Index q) {
     ++r_.seeds;
-    const std::optional<int> w = winding_outside(q);
+    std::optional<int> w;
+    const auto cast = std::lower_bound(isolated_.begin(), isolated_.end(), q,
+                                       [](const Isolated& c, Index i) { return c.piece < i; });
+    if (cast != isolated_.end() && cast->piece == q) {
+      w = cast->winding;
+      r_.line_casts += cast->lines;
+    } else {
+      w = winding_outside(q, r_.line_casts);
+    }
     if (!w) return;  // left for the growth to reach; unclassified if it never does
     flood(q, *w);
+  }
+
+  /// A patch that no intersection curve bounds (a whole component crossing
+  /// nothing, e.g. each of the pockets that a rounding pass's input has as
+  /// surfaces of their own: ~15k on the crank's raw offset) is reached by no
+  /// other's flood, so the seed loop will seed it from its least piece
+  /// when that is an intersection-free triangle: those pieces' winding
+  /// numbers are cast beforehand, side by side (the same lines in the same
+  /// order each; seed() takes them from isolated_).
+  void cast_isolated() {
+    std::vector<char> bounded(pieces_.size(), 0);
+    for (const std::uint64_t side : river_sides_) bounded[side >> 32] = 1;
+    std::vector<Index> least;
+    for (Index f = 0; f < Index(soup_.face_count()); ++f)
+      if (patch_[f] == f && !bounded[f] && pieces_[f].alive && partners_[f].empty()) least.push_back(f);
+    if (least.empty()) return;
+    tree();  // built once, before the threads ask it
+    isolated_.resize(least.size());
+    tbb::parallel_for(std::size_t(0), least.size(), [&](std::size_t n) {
+      Isolated& c = isolated_[n];
+      c.piece = least[n];
+      c.winding = winding_outside(c.piece, c.lines);
+    });
   }
 
   /// The winding number of the input surface just outside piece q (on the
@@ -447,7 +478,7 @@ class Regularizer {
   /// the sign of their normal along the line (those through the same point
   /// are the sheets q stands for). nullopt when no tried line avoids every
   /// edge and vertex. Valid: winding <= 0 outside and >= 1 inside.
-  std::optional<int> winding_outside(Index q) {
+  std::optional<int> winding_outside(Index q, std::size_t& lines) {
     const Piece& piece = pieces_[q];
     const FaceView src = soup_.face(piece.source);
     const Point3d& s0 = soup_.points[src[0]];
@@ -478,7 +509,7 @@ class Regularizer {
       for (int e = 0; e < 3 && inside; ++e)
         inside = int(CGAL::orientation(corners[e], corners[(e + 1) % 3], at)) == sign_k;
       if (!inside) continue;
-      ++r_.line_casts;
+      ++lines;
       const std::optional<int> winding = cast(piece.source, k, s, t, sign_k);
       if (winding) return winding;
     }
@@ -488,14 +519,23 @@ class Regularizer {
   /// The line {x_i = s, x_j = t} against the input triangles: the signed
   /// crossings beyond face `source` on its outer side (sign_k: the sign of
   /// its normal along k). nullopt when the line meets an edge or a vertex,
-  /// or lies in a triangle's plane.
+  /// or lies in a triangle's plane, beyond the source's nearest corner.
   std::optional<int> cast(Index source, int k, double s, double t, int sign_k) {
     const int i = kept_axes(k)[0], j = kept_axes(k)[1];
+    // A half line, from the source's last corner behind its outer side on:
+    // every triangle beyond the source on the line crosses it (exact
+    // tests on doubles), and the tree's boxes behind are not visited (the
+    // whole line's were: ~0.1 ms a line on 1.5M faces, where a rounding
+    // pass of the crank's raw offset casts one for each of ~15k pockets).
+    const FaceView sv = soup_.face(source);
+    double from = soup_.points[sv[0]][k];
+    for (int e = 1; e < 3; ++e)
+      from = sign_k > 0 ? std::min(from, soup_.points[sv[e]][k]) : std::max(from, soup_.points[sv[e]][k]);
     double o[3], d[3] = {0, 0, 0};
     o[i] = s;
     o[j] = t;
-    o[k] = below_[k];
-    d[k] = 1;
+    o[k] = from;
+    d[k] = sign_k;
     const IK::Ray_3 ray(IK::Point_3(o[0], o[1], o[2]), IK::Vector_3(d[0], d[1], d[2]));
     std::vector<Primitive::Id> hits;
     tree().all_intersected_primitives(ray, std::back_inserter(hits));
@@ -1462,6 +1502,12 @@ class Regularizer {
   /// Patches' sides on intersection curves: patch << 32 | 3 * piece + edge, sorted.
   std::vector<std::uint64_t> river_sides_;
   std::vector<Index> unjoined_;  // a piece per edge of it where the growth stops (see link_patches())
+  struct Isolated {
+    Index piece = 0;
+    std::optional<int> winding;
+    std::size_t lines = 0;  // lines cast for it
+  };
+  std::vector<Isolated> isolated_;  // by piece: cast_isolated()
   /// A use of an edge by a piece: 3 * piece + e for its edge e (from corner e).
   struct EdgeUse {
     std::uint64_t key;
@@ -1505,7 +1551,6 @@ class Regularizer {
 
   InputTriangles triangles_;
   Tree tree_;
-  double below_[3];
 };
 
 /// Distinct exact points can round to one double (slivers thinner than the
