@@ -10,6 +10,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -60,8 +61,10 @@ class SurfaceDistance {
   bool meets(const std::array<Point3d, 3>& piece) const;
   /// Indices of the surface triangles whose bounding boxes meet the box
   /// [lo, hi] (candidates for squared_distance_to), each once, in no
-  /// particular order.
+  /// particular order. With `most`, nullopt as soon as more than that many
+  /// boxes meet it.
   std::vector<std::size_t> triangles_near(const Point3d& lo, const Point3d& hi) const;
+  std::optional<std::vector<std::size_t>> triangles_near(const Point3d& lo, const Point3d& hi, std::size_t most) const;
   /// Distance along the ray from `origin` in direction `direction` to the
   /// first triangle it hits, ignoring the triangles in `skip` (sorted); -1
   /// when it hits none (the local thickness of Yamakawa & Shimada §5.2).
@@ -82,8 +85,11 @@ class SurfaceDistance {
   /// centroid lies inside a triangle of U. This bounds a piece over a
   /// region tessellated by long thin triangles (CAD fans, or a curved
   /// surface tessellated anew), where no single triangle is near all its
-  /// corners.
-  double cover_bound(const std::array<Point3d, 3>& piece, std::size_t t, double limit) const;
+  /// corners. Also +infinity, not tried, when more than `most` surface
+  /// triangles' boxes meet the piece's (a search that would cost more than
+  /// the caller's alternative).
+  double cover_bound(const std::array<Point3d, 3>& piece, std::size_t t, double limit,
+                     std::size_t most = std::numeric_limits<std::size_t>::max()) const;
 
  private:
   struct Impl;
