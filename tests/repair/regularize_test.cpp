@@ -184,6 +184,46 @@ TEST_CASE("regularize: a solid inside another is removed (and counted), a cavity
   }
 }
 
+TEST_CASE("regularize: a component crossing nothing is classified from whichever of its faces comes first") {
+  // The component's winding number is cast from its first face (a half line
+  // from that face's far side outwards, along its normal's dominant axis):
+  // rotating the box's face list makes every side come first, so lines go
+  // up and down each axis. The big box crosses another (the growth has work
+  // of its own); the small one lies inside it (solid: removed; cavity: kept)
+  // or outside both (kept).
+  const Box big{{{0, 0, 0}, {4, 4, 4}}}, other{{{3, 1, 1}, {6, 3, 3}}};
+  const Box inner{{{1, 1.5, 1.25}, {2, 2.5, 2.25}}}, outer{{{8, 1, 1}, {9, 2, 2}}};
+  const double united = volume(big) + volume(other) - volume(meet(big, other));
+  auto rotated = [](const Soup& s, std::size_t r) {
+    Soup out;
+    out.points = s.points;
+    for (std::size_t n = 0; n < s.face_count(); ++n) {
+      const FaceView v = s.face((n + r) % s.face_count());
+      out.add_triangle(v[0], v[1], v[2]);
+    }
+    return out;
+  };
+  struct Case {
+    const char* name;
+    Box b;
+    bool inward;
+    double volume;       // of the union's output
+    std::size_t removed; // components
+  };
+  for (const Case& c : {Case{"enclosed solid", inner, false, united, 1}, Case{"cavity", inner, true, united - 1, 0},
+                        Case{"outside", outer, false, united + 1, 0}}) {
+    const Soup small = box(c.b, c.inward);
+    for (std::size_t r = 0; r < small.face_count(); ++r) {
+      INFO(c.name << ", the box's face list rotated by " << r);
+      const RegularizeResult res = regularize(test::concat(test::concat(box(big), box(other)), rotated(small, r)));
+      const Report rep = inspect(written(res, "regularize_first_face.off"));
+      CHECK(rep.certified_clean());
+      CHECK(rep.signed_volume == Approx(c.volume).epsilon(1e-12));
+      CHECK(res.report.components_removed == c.removed);
+    }
+  }
+}
+
 TEST_CASE("regularize: a clean mesh comes back face for face, bit for bit") {
   const Soup in = read_soup(test::fixture("torus.off"));
   const RegularizeResult r = regularize(in);
