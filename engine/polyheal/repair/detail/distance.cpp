@@ -258,13 +258,14 @@ double one_sided(const std::vector<Corners>& from, const SurfaceDistance& to, do
     // is large — a regularized raw offset, whose removed parts are far from
     // the output: the crank's, 451k triangles, searched 7000 triangles a
     // piece and failed 9 times in 10 — few bisections do.)
-    const double slack = bound + error_bound - *std::min_element(piece.d.begin(), piece.d.end());
-    const double ratio = slack > 0 ? edge[k] / slack : HUGE_VAL;
-    const std::size_t most = ratio < 1e3 ? std::size_t(256 + 20 * ratio * ratio) : std::numeric_limits<std::size_t>::max();
     if (edge[k] > bound + error_bound &&
-        *std::max_element(piece.d.begin(), piece.d.end()) <= (bound + error_bound) * (1 + 1e-6) &&
-        to.cover_bound(piece.p, piece.best, bound + error_bound, most) <= bound + error_bound)
-      return s;
+        *std::max_element(piece.d.begin(), piece.d.end()) <= (bound + error_bound) * (1 + 1e-6)) {
+      const double slack = bound + error_bound - *std::min_element(piece.d.begin(), piece.d.end());
+      const double ratio = slack > 0 ? edge[k] / slack : HUGE_VAL;
+      const std::size_t most =
+          ratio < 1e3 ? std::size_t(256 + 20 * ratio * ratio) : std::numeric_limits<std::size_t>::max();
+      if (to.cover_bound(piece.p, piece.best, bound + error_bound, most) <= bound + error_bound) return s;
+    }
     const int i = (k + 1) % 3, j = (k + 2) % 3;  // the longest edge runs from corner i to corner j
     Point3d m;
     for (int c = 0; c < 3; ++c) m[c] = 0.5 * (piece.p[i][c] + piece.p[j][c]);
