@@ -32,10 +32,18 @@ struct Homogeneous {
   Z den;
 };
 
-/// h's coordinates as exact rationals: one division each.
+/// num / den's coordinates as exact rationals: one division each.
+template <std::size_t D>
+std::array<mpq_class, D> rationals(const std::array<Z, D>& num, const Z& den) {
+  const mpq_class d(den);
+  std::array<mpq_class, D> out;
+  for (std::size_t c = 0; c < D; ++c) out[c] = mpq_class(num[c]) / d;
+  return out;
+}
+
+/// h's coordinates as exact rationals.
 inline std::array<mpq_class, 3> rationals(const Homogeneous& h) {
-  const mpq_class den(h.den);
-  return {mpq_class(h.num.x()) / den, mpq_class(h.num.y()) / den, mpq_class(h.num.z()) / den};
+  return rationals<3>({h.num.x(), h.num.y(), h.num.z()}, h.den);
 }
 
 /// h as an Epeck point known exactly: a leaf of the lazy tree, with tight
@@ -89,10 +97,7 @@ class HomogeneousRep final : public Lazy::Self_rep {
   HomogeneousRep(const typename Lazy::AT& approx, Form form) : Base(approx), form_(std::move(form)) {}
   const Form& form() const { return form_; }
   void update_exact() const override {
-    const mpq_class den(form_.den);
-    std::array<mpq_class, D> c;
-    for (int k = 0; k < D; ++k) c[k] = mpq_class(form_.num[k]) / den;
-    typename Lazy::ET e = make_exact(c, std::make_index_sequence<D>());
+    typename Lazy::ET e = make_exact(rationals<D>(form_.num, form_.den), std::make_index_sequence<D>());
     auto* p = new typename Base::Indirect(std::move(e));
     this->keep_at(p);
     this->set_ptr(p);
