@@ -67,6 +67,7 @@ inline nlohmann::json regularize_json(const RepairFiles& a, const RegularizeRepo
         {"float_vertices", r.float_rounded},
         {"float_intersecting_pairs", r.float_pairs},
         {"float_vertices_moved", r.float_moves}}},
+      {"certificate_faces_searched", r.certificate_searched},
       {"max_distance_to_input", r.max_distance_to_input},
       {"max_distance_to_input_relative", r.max_distance_to_input / diag},
       {"hausdorff", r.hausdorff},
@@ -166,7 +167,7 @@ inline void regularize_and_report(const Soup& soup, const RepairFiles& args, Tty
   finish_repair(
       result.soup, args, progress, r.seconds_certify,
       [&](const Soup& written) {
-        certify(soup, written, result.source_face, r);
+        certify(soup, written, result.source_face, r, result.scanned ? &*result.scanned : nullptr);
         return r.certified;
       },
       [&] { return regularize_json(args, r, read_s, r.seconds_certify); },

@@ -16,6 +16,7 @@
 #include "polyheal/io/read.h"
 #include "polyheal/io/write.h"
 #include "polyheal/mesh/errors.h"
+#include "polyheal/mesh/vec3.h"
 #include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/regularize.h"
 #include "support/builders.h"
@@ -522,3 +523,40 @@ TEST_CASE("regularize for STL: the union rounded to floats is certified as the f
   CHECK(off_surface(in, f.soup) < 1e-5 * d.report.bbox_diagonal);  // still on the input, up to the moves
 }
 
+
+TEST_CASE("regularize: the certificate searches only written faces the rounding check did not search, and finds "
+          "what a changed file has") {
+  // Most of the knot tube's output faces have a corner on an intersection
+  // curve, so the rounding check searches the whole rounded surface and
+  // keeps it (RegularizeResult::scanned) for the certificate.
+  const Soup in = read_soup(test::fixture("knot_tube_r1.2.off"));
+  RegularizeOptions o;
+  o.certify = false;
+  const RegularizeResult r = regularize(in, o);
+  REQUIRE(r.scanned);
+  CHECK(r.scanned->pairs == find_self_intersections(r.scanned->soup));  // all its pairs, exactly
+  const Soup out = written(r, "regularize_scanned.off");
+  REQUIRE(out.face_count() > 1000);
+  RegularizeReport rep = r.report;
+  certify(in, out, r.source_face, rep, &*r.scanned);
+  CHECK(rep.certified);
+  CHECK(rep.certificate_searched < out.face_count() / 100);
+  CHECK(rep.out.self_intersections == inspect(out).self_intersections);
+
+  // The file changed after the check (a face re-cornered through the tube,
+  // a vertex moved): the certificate finds the pairs the whole search finds.
+  Soup changed = out;
+  Index far = 0;
+  for (Index v = 0; v < changed.points.size(); ++v)
+    if (squared_norm(sub(changed.points[v], changed.points[0])) > squared_norm(sub(changed.points[far], changed.points[0])))
+      far = v;
+  changed.indices[2] = far;
+  changed.points[changed.indices[40]] = mul(add(changed.points[changed.indices[40]], changed.points[far]), 0.5);
+  const Report full = inspect(changed);
+  REQUIRE(full.self_intersections.size() > 0);
+  RegularizeReport again = r.report;
+  certify(in, changed, r.source_face, again, &*r.scanned);
+  CHECK_FALSE(again.certified);
+  CHECK(again.certificate_searched > 0);
+  CHECK(again.out.self_intersections == full.self_intersections);
+}

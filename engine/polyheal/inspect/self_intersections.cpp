@@ -494,7 +494,7 @@ std::vector<FacePair> find_self_intersections(const Soup& soup, const SelfInters
 
 std::optional<std::vector<FacePair>> find_self_intersections_from(const Soup& soup, const Soup& base,
                                                                   const std::vector<FacePair>& base_pairs,
-                                                                  double most) {
+                                                                  double most, std::size_t* changed_faces) {
   using Key = std::array<Point3d, 3>;
   auto key = [](const Soup& s, std::size_t f) {
     const FaceView v = s.face(f);
@@ -543,6 +543,7 @@ std::optional<std::vector<FacePair>> find_self_intersections_from(const Soup& so
     }
     if (double(n_changed) > most * double(soup.face_count())) return std::nullopt;
   }
+  if (changed_faces) *changed_faces = n_changed;
   std::vector<FacePair> pairs;
   for (const FacePair& p : base_pairs) {
     if (first[p.first] == kEmptySlot || first[p.second] == kEmptySlot) continue;  // polygons

@@ -47,9 +47,11 @@ std::vector<FacePair> find_self_intersections(const Soup& soup, const SelfInters
 /// welded faces); empty when more than `most` of soup's faces changed (the
 /// whole search is quicker then). Polygons (their fans depend on the first
 /// corner) and triangles that appear twice in soup count as changed.
+/// `changed_faces`, when given, receives the number of faces searched.
 std::optional<std::vector<FacePair>> find_self_intersections_from(const Soup& soup, const Soup& base,
                                                                   const std::vector<FacePair>& base_pairs,
-                                                                  double most = 0.125);
+                                                                  double most = 0.125,
+                                                                  std::size_t* changed_faces = nullptr);
 
 /// Early-exit form: true at the first intersecting pair found.
 bool does_self_intersect(const Soup& soup, const SelfIntersectionOptions& options = {});

@@ -68,6 +68,7 @@ struct OffsetResult {
   Soup soup;   // the output (the raw offset itself when not regularized)
   OffsetReport report;
   std::vector<std::size_t> source_face;  // per output face, the raw face it lies on
+  std::optional<ScannedSurface> scanned;  // RegularizeResult::scanned, for certify()
 };
 
 /// Throws UnsupportedInput for an input that is not a closed, oriented

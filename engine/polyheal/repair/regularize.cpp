@@ -2034,10 +2034,22 @@ namespace {
 
 /// The intersecting pairs with a face that has a corner flagged in `at`
 /// (rounded): only those faces can differ from the surface certified before.
-std::vector<FacePair> pairs_at(const Soup& soup, const std::vector<char>& at) {
+/// Where they are more than a quarter of the faces, the whole surface is
+/// searched instead — the same sweep (find_self_intersections pairs all the
+/// boxes then too), with the pairs of two unflagged faces tested as well —
+/// and kept with its pairs in `scanned` (when it has no identical points):
+/// the certificate then searches only the faces of the written file that
+/// differ from it (Hand1's raw offset at 0.6% chord tolerance, 250k faces
+/// out: the certificate's search 0.34 s -> ~0.03 s).
+std::vector<FacePair> pairs_at(const Soup& soup, const std::vector<char>& at, std::optional<ScannedSurface>& scanned) {
   std::vector<char> face(soup.face_count(), 0);
   for (std::size_t f = 0; f < soup.face_count(); ++f)
     for (Index v : soup.face(f)) face[f] |= at[v];
+  if (4 * std::size_t(std::count(face.begin(), face.end(), char(1))) > soup.face_count()) {
+    std::vector<FacePair> pairs = find_self_intersections(soup);
+    if (weld_identical_points(soup.points).merged == 0) scanned = ScannedSurface{soup, pairs};
+    return pairs;
+  }
   SelfIntersectionOptions only;
   only.only = &face;
   return find_self_intersections(soup, only);
@@ -2187,7 +2199,7 @@ RegularizeResult regularized(const Soup& raw, const RegularizeOptions& o, std::v
   // doubles can make faces intersect again; deintersect's vertex moves (in
   // doubles) repair that where they can.
   if (o.observer) o.observer->stage("checking the rounded surface");
-  const std::vector<FacePair> rounded = pairs_at(result.soup, made);
+  const std::vector<FacePair> rounded = pairs_at(result.soup, made, result.scanned);
   r.rounding_pairs = rounded.size();
   unsettled.clear();
   if (!rounded.empty()) {
@@ -2217,6 +2229,7 @@ RegularizeResult regularized(const Soup& raw, const RegularizeOptions& o, std::v
         for (std::size_t& f : next.source_face) f = result.source_face[f];
         result.soup = std::move(next.soup);
         result.source_face = std::move(next.source_face);
+        if (next.scanned) result.scanned = std::move(next.scanned);  // the later, nearer base
         unsettled = std::move(next_unsettled);
         r.rounding_passes = pass + 1;
         r.pinches_split += next.report.pinches_split;
@@ -2244,7 +2257,7 @@ RegularizeResult regularized(const Soup& raw, const RegularizeOptions& o, std::v
     if (n == 0) break;
     r.float_rounded += n;
     snap_rounded(result, moved, r);
-    const std::vector<FacePair> pairs = pairs_at(result.soup, moved);
+    const std::vector<FacePair> pairs = pairs_at(result.soup, moved, result.scanned);
     r.float_pairs += pairs.size();
     if (pairs.empty() || round == 3) break;
     std::vector<char> recheck(result.soup.face_count(), 0);
@@ -2258,7 +2271,7 @@ RegularizeResult regularized(const Soup& raw, const RegularizeOptions& o, std::v
   if (o.certify) {
     t0 = std::chrono::steady_clock::now();
     if (o.observer) o.observer->stage("certifying");
-    certify(raw, result.soup, result.source_face, r);
+    certify(raw, result.soup, result.source_face, r, result.scanned ? &*result.scanned : nullptr);
     r.seconds_certify = seconds_since(t0);
   }
   return result;
@@ -2411,11 +2424,22 @@ double max_distance_to_sources(const Soup& input, const Soup& written, const std
 }  // namespace
 
 void certify(const Soup& input, const Soup& written, const std::vector<std::size_t>& source_face,
-             RegularizeReport& r) {
+             RegularizeReport& r, const ScannedSurface* scanned) {
   // The oracle on the written file beside the distances (each is parallel
   // inside but has serial parts: tree building, sorting).
   const double bound = 1e-3 * r.bbox_diagonal;
-  tbb::parallel_invoke([&] { r.out = inspect(written); },
+  auto oracle = [&] {
+    InspectOptions io;
+    std::optional<std::vector<FacePair>> pairs;
+    if (scanned)
+      pairs = find_self_intersections_from(written, scanned->soup, scanned->pairs, 0.125, &r.certificate_searched);
+    if (pairs) io.self_intersections = &*pairs;
+    r.out = inspect(written, io);
+    // inspect() searches the whole file where it was not given the pairs,
+    // and where the file has identical points (its pairs are the welded soup's)
+    if (!pairs || r.out.merged_identical_vertices) r.certificate_searched = written.face_count();
+  };
+  tbb::parallel_invoke(oracle,
                        [&] {
                          r.max_distance_to_input =
                              max_distance_to_sources(input, written, source_face, r.bbox_diagonal);

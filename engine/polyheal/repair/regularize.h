@@ -82,6 +82,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -140,9 +141,19 @@ struct RegularizeReport {
   std::size_t float_moves = 0;         // ... vertices deintersect moved to repair them
   // certificate, on the soup as written (certify())
   Report out;                          // the exact inspection of the written file
+  std::size_t certificate_searched = 0;  // written faces its self-intersection search covered (certify())
   double max_distance_to_input = 0;    // output -> input (each output triangle to the input triangle it lies on)
   double hausdorff = 0, hausdorff_error_bound = 0;  // symmetric, to the input (-1: not measured)
   bool certified = false;              // out.certified_clean()
+};
+
+/// A surface searched whole for self-intersections, exactly, with every
+/// intersecting pair of it (sorted) and no two points identical: a base from
+/// which certify() finds the pairs of a written file that keeps most of its
+/// triangles, searching only the others (find_self_intersections_from).
+struct ScannedSurface {
+  Soup soup;
+  std::vector<FacePair> pairs;
 };
 
 struct RegularizeResult {
@@ -150,6 +161,10 @@ struct RegularizeResult {
   RegularizeReport report;
   /// Per output face, the input face it lies on (provenance).
   std::vector<std::size_t> source_face;
+  /// The rounded surface as the last check of what rounding broke searched
+  /// it whole (before that check's repairs), when it did: most of its faces
+  /// had a rounded corner. Not kept when it had identical points.
+  std::optional<ScannedSurface> scanned;
 };
 
 /// Stages 1-3, the repair of what rounding broke, and, with
@@ -166,8 +181,11 @@ bool kept_as_input(const Soup& input, const Soup& output, const std::vector<std:
 
 /// Stage 4 on `written` (the output as read back; `input` as given): fills the
 /// certificate half of `report` (out, distances, certified). `source_face`
-/// is RegularizeResult::source_face.
+/// is RegularizeResult::source_face. With `scanned` (RegularizeResult::
+/// scanned), the self-intersection search covers only the written faces
+/// that are not triangles of that surface (by their corners' positions,
+/// compared here); the pairs among the others are the scanned surface's.
 void certify(const Soup& input, const Soup& written, const std::vector<std::size_t>& source_face,
-             RegularizeReport& report);
+             RegularizeReport& report, const ScannedSurface* scanned = nullptr);
 
 }  // namespace polyheal
