@@ -553,3 +553,31 @@ TEST_CASE("nesting: inside-out components are those with negative volume inside 
     CHECK(r.inside_out_components == 0);
   }
 }
+
+TEST_CASE("inspect_from: the report of a surface made from another, searching only its changed faces, is inspect()'s",
+          "[inspect]") {
+  // bones (366 pairs) with a corner of an intersecting face pushed out: the
+  // faces round it are new, the pairs change; the rest come from bones'.
+  const Soup base = read_soup(test::fixture("bones.off"));
+  const Report base_report = inspect(base);
+  REQUIRE(base_report.self_intersections.size() > 300);
+  Soup edited = base;
+  const Index moved = edited.face(base_report.self_intersections[100].first)[0];
+  for (int k = 0; k < 3; ++k) edited.points[moved][k] *= 1.3;
+  const Report full = inspect(edited);
+  REQUIRE(full.self_intersections != base_report.self_intersections);  // at stake
+  std::size_t searched = 0;
+  const Report from = inspect_from(edited, base, base_report.self_intersections, {}, &searched);
+  CHECK(from.self_intersections == full.self_intersections);
+  CHECK(from.certified_clean() == full.certified_clean());
+  CHECK(searched > 0);
+  CHECK(searched < 20);
+
+  // Identical points: the report pairs welded faces, so the whole soup is searched.
+  Soup twin = edited;
+  twin.points.push_back(twin.points[twin.face(0)[0]]);
+  twin.indices[0] = static_cast<Index>(twin.points.size() - 1);
+  const Report twin_from = inspect_from(twin, base, base_report.self_intersections, {}, &searched);
+  CHECK(searched == twin.face_count());
+  CHECK(twin_from.self_intersections == inspect(twin).self_intersections);
+}

@@ -96,6 +96,19 @@ Report inspect(const Soup& input, const InspectOptions& o) {
   return r;
 }
 
+Report inspect_from(const Soup& soup, const Soup& base, const std::vector<FacePair>& base_pairs, InspectOptions o,
+                    std::size_t* searched) {
+  std::size_t changed = soup.face_count();
+  const std::optional<std::vector<FacePair>> pairs =
+      find_self_intersections_from(soup, base, base_pairs, 0.125, &changed);
+  if (pairs) o.self_intersections = &*pairs;
+  Report r = inspect(soup, o);
+  // inspect() searches the whole soup where it has identical points (its
+  // pairs are the welded soup's)
+  if (searched) *searched = !pairs || r.merged_identical_vertices ? soup.face_count() : changed;
+  return r;
+}
+
 namespace {
 
 /// Report::crack_pairs: only the corners of intersecting faces can close

@@ -134,6 +134,20 @@ struct Report {
 
 Report inspect(const Soup& soup, const InspectOptions& options = {});
 
+/// inspect(soup, options) for a soup made from `base`, whose intersecting
+/// pairs are known (every one, as inspect(base) reports them): the
+/// self-intersection search covers only the faces of soup that are not
+/// triangles of base by their corners' coordinates
+/// (find_self_intersections_from), and takes the pairs among the others
+/// from base's — the same exact test on the same coordinates. The whole
+/// soup is searched where more than an eighth of its faces differ, or it
+/// has identical points. `searched`, when given, receives how many faces
+/// the search covered. A certificate of a written file that keeps most of
+/// a surface searched before (regularize: its input, or the rounded
+/// surface).
+Report inspect_from(const Soup& soup, const Soup& base, const std::vector<FacePair>& base_pairs,
+                    InspectOptions options = {}, std::size_t* searched = nullptr);
+
 /// Topological invariants compared between input and output.
 struct SurfaceTopology {
   long euler = 0;                // V - E + F

@@ -2436,15 +2436,9 @@ void certify(const Soup& input, const Soup& written, const std::vector<std::size
   // inside but has serial parts: tree building, sorting).
   const double bound = 1e-3 * r.bbox_diagonal;
   auto oracle = [&] {
-    InspectOptions io;
-    std::optional<std::vector<FacePair>> pairs;
-    if (scanned)
-      pairs = find_self_intersections_from(written, scanned->soup, scanned->pairs, 0.125, &r.certificate_searched);
-    if (pairs) io.self_intersections = &*pairs;
-    r.out = inspect(written, io);
-    // inspect() searches the whole file where it was not given the pairs,
-    // and where the file has identical points (its pairs are the welded soup's)
-    if (!pairs || r.out.merged_identical_vertices) r.certificate_searched = written.face_count();
+    r.certificate_searched = written.face_count();
+    r.out = scanned ? inspect_from(written, scanned->soup, scanned->pairs, {}, &r.certificate_searched)
+                    : inspect(written);
   };
   tbb::parallel_invoke(oracle,
                        [&] {
