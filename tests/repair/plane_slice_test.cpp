@@ -296,6 +296,19 @@ TEST_CASE("lazy_point: the homogeneous points' intervals, values, roundings and 
       REQUIRE(nearest_double_of(u[c]) == nearest_double_of(reduced.exact()[c]));
     }
     REQUIRE(lazy.exact() == reduced.exact());
+    // dropped to two coordinates (regularize's projections into a
+    // triangle's plane): the 3D form's, without a copy; rationals on demand
+    for (const auto& [i, j] : {std::pair{0, 1}, std::pair{1, 2}, std::pair{2, 0}}) {
+      const Kernel::Point_2 q =
+          detail::projected_point<Kernel::Point_2>(lazy, *detail::homogeneous_of<EPoint, 3>(lazy), i, j);
+      const auto* rep = detail::projected_of<Kernel::Point_2, EPoint>(q);
+      REQUIRE(rep != nullptr);
+      const detail::Row2 row = rep->row();
+      CHECK((row[0] == h.num[i] && row[1] == h.num[j] && row[2] == h.den));
+      CHECK(q.approx().x().inf() == a[i].inf());
+      CHECK(q.approx().y().sup() == a[j].sup());
+      CHECK((q.exact().x() == reduced.exact()[i] && q.exact().y() == reduced.exact()[j]));
+    }
     projected.emplace_back(reduced.exact().x(), reduced.exact().y());
     rows.push_back({h.num.x(), h.num.y(), h.den});
   }

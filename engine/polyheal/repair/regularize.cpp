@@ -101,7 +101,7 @@ struct CdtTraits : K {
       const auto& a = p.approx();
       if (a.x().is_point() && a.y().is_point())
         return detail::Row2{detail::Z(a.x().inf()), detail::Z(a.y().inf()), detail::Z(1)};
-      if (const auto* h = detail::homogeneous_of<K::Point_2, 2>(p)) return detail::Row2{h->num[0], h->num[1], h->den};
+      if (const auto* h = detail::projected_of<K::Point_2, K::Point_3>(p)) return h->row();
       return std::nullopt;
     }
   };
@@ -599,9 +599,9 @@ class Regularizer {
   static K::Point_2 exact_proj(const EPoint& p, int i, int j) {
     const auto& a = p.approx();
     if (a[i].is_point() && a[j].is_point()) return K::Point_2(a[i].inf(), a[j].inf());
-    using Rep = K::Point_2::Rep;
     if (const auto* h = detail::homogeneous_of<EPoint, 3>(p))  // the projection's homogeneous form: no rationals
-      return K::Point_2(Rep(new detail::HomogeneousRep<Rep, 2>(Rep::AT(a[i], a[j]), {{h->num[i], h->num[j]}, h->den})));
+      return detail::projected_point<K::Point_2>(p, *h, i, j);
+    using Rep = K::Point_2::Rep;
     const auto& e = p.exact();
     return K::Point_2(Rep(new CGAL::Lazy_rep_0<Rep::AT, Rep::ET, K::E2A>(Rep::AT(a[i], a[j]), Rep::ET(e[i], e[j]))));
   }
