@@ -148,9 +148,10 @@ struct RegularizeReport {
 };
 
 /// A surface searched whole for self-intersections, exactly, with every
-/// intersecting pair of it (sorted) and no two points identical: a base from
-/// which certify() finds the pairs of a written file that keeps most of its
-/// triangles, searching only the others (find_self_intersections_from).
+/// intersecting pair of it as inspect() reports them (sorted; for a soup
+/// with identical points, those of the soup welded): a base from which
+/// certify() finds the pairs of a written file that keeps most of its
+/// triangles, searching only the others (inspect_from()).
 struct ScannedSurface {
   Soup soup;
   std::vector<FacePair> pairs;
@@ -161,9 +162,11 @@ struct RegularizeResult {
   RegularizeReport report;
   /// Per output face, the input face it lies on (provenance).
   std::vector<std::size_t> source_face;
-  /// The rounded surface as the last check of what rounding broke searched
-  /// it whole (before that check's repairs), when it did: most of its faces
-  /// had a rounded corner. Not kept when it had identical points.
+  /// certify()'s base: the rounded surface as the last check of what
+  /// rounding broke searched it whole (before that check's repairs), when it
+  /// did — most of its faces had a rounded corner — and it had no identical
+  /// points; else the input (welded) as the detect stage searched it, unless
+  /// the caller gave its pairs (RegularizeOptions::known_pairs: then none).
   std::optional<ScannedSurface> scanned;
 };
 
