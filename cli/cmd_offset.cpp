@@ -107,7 +107,7 @@ void add_offset(CLI::App& app, int& exit_code) {
         result.soup, *args, progress, write_s,
         [&](const Soup& written) {
           if (!r.regularized) return false;
-          certify(result.raw, written, result.source_face, r.regularize, result.scanned ? &*result.scanned : nullptr);
+          certify(result.raw, written, result.source_face, r.regularize, result.scanned);
           return r.regularize.certified;
         },
         [&] {

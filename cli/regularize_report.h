@@ -167,7 +167,7 @@ inline void regularize_and_report(const Soup& soup, const RepairFiles& args, Tty
   finish_repair(
       result.soup, args, progress, r.seconds_certify,
       [&](const Soup& written) {
-        certify(soup, written, result.source_face, r, result.scanned ? &*result.scanned : nullptr);
+        certify(soup, written, result.source_face, r, result.scanned);
         return r.certified;
       },
       [&] { return regularize_json(args, r, read_s, r.seconds_certify); },

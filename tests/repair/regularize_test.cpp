@@ -543,7 +543,7 @@ TEST_CASE("regularize: the certificate searches only written faces no earlier wh
     const Soup out = written(r, std::string("regularize_scanned_") + name);
     REQUIRE(out.face_count() > 1000);
     RegularizeReport rep = r.report;
-    certify(in, out, r.source_face, rep, &*r.scanned);
+    certify(in, out, r.source_face, rep, r.scanned);
     CHECK(rep.certified);
     CHECK(rep.certificate_searched < out.face_count() / 2);
     CHECK(rep.out.self_intersections == inspect(out).self_intersections);
@@ -562,7 +562,7 @@ TEST_CASE("regularize: the certificate searches only written faces no earlier wh
     const Report full = inspect(changed);
     REQUIRE(full.self_intersections.size() > 0);
     RegularizeReport again = r.report;
-    certify(in, changed, r.source_face, again, &*r.scanned);
+    certify(in, changed, r.source_face, again, r.scanned);
     CHECK_FALSE(again.certified);
     CHECK(again.certificate_searched > 0);
     CHECK(again.out.self_intersections == full.self_intersections);

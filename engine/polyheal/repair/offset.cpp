@@ -429,7 +429,7 @@ OffsetResult offset(const Soup& input, const OffsetOptions& o) {
   RegularizeResult reg = regularize(result.raw, ro);
   r.regularized = true;
   drop_pockets(input, result.raw, std::abs(o.distance) - 2 * r.tolerance, reg, r);
-  if (o.certify) certify(result.raw, reg.soup, reg.source_face, reg.report, reg.scanned ? &*reg.scanned : nullptr);
+  if (o.certify) certify(result.raw, reg.soup, reg.source_face, reg.report, reg.scanned);
   r.regularize = reg.report;
   result.soup = std::move(reg.soup);
   result.source_face = std::move(reg.source_face);

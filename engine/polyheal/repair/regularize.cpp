@@ -2117,8 +2117,7 @@ RegularizeResult regularized(const Soup& raw, const RegularizeOptions& o, std::v
     for (std::size_t& f : result.source_face) f = polygon[f];
     result.report.faces = raw.face_count();
     for (std::size_t f = 0; f < raw.face_count(); ++f) result.report.polygons_fanned += raw.face(f).size() > 3 ? 1 : 0;
-    if (o.certify)
-      certify(raw, result.soup, result.source_face, result.report, result.scanned ? &*result.scanned : nullptr);
+    if (o.certify) certify(raw, result.soup, result.source_face, result.report, result.scanned);
     return result;
   }
   const Soup input = apply_weld(raw, weld_identical_points(raw.points));
@@ -2158,8 +2157,7 @@ RegularizeResult regularized(const Soup& raw, const RegularizeOptions& o, std::v
     for (std::size_t& f : result.source_face) f = kept[f];
     result.report.faces = raw.face_count();
     result.report.walls_left_out = walls.size();
-    if (o.certify)
-      certify(raw, result.soup, result.source_face, result.report, result.scanned ? &*result.scanned : nullptr);
+    if (o.certify) certify(raw, result.soup, result.source_face, result.report, result.scanned);
     return result;
   }
   r.zero_area_faces = in.degenerate_faces.size();
@@ -2278,7 +2276,7 @@ RegularizeResult regularized(const Soup& raw, const RegularizeOptions& o, std::v
   if (o.certify) {
     t0 = std::chrono::steady_clock::now();
     if (o.observer) o.observer->stage("certifying");
-    certify(raw, result.soup, result.source_face, r, result.scanned ? &*result.scanned : nullptr);
+    certify(raw, result.soup, result.source_face, r, result.scanned);
     r.seconds_certify = seconds_since(t0);
   }
   return result;
@@ -2431,7 +2429,7 @@ double max_distance_to_sources(const Soup& input, const Soup& written, const std
 }  // namespace
 
 void certify(const Soup& input, const Soup& written, const std::vector<std::size_t>& source_face,
-             RegularizeReport& r, const ScannedSurface* scanned) {
+             RegularizeReport& r, const std::optional<ScannedSurface>& scanned) {
   // The oracle on the written file beside the distances (each is parallel
   // inside but has serial parts: tree building, sorting).
   const double bound = 1e-3 * r.bbox_diagonal;

@@ -189,6 +189,6 @@ bool kept_as_input(const Soup& input, const Soup& output, const std::vector<std:
 /// that are not triangles of that surface (by their corners' positions,
 /// compared here); the pairs among the others are the scanned surface's.
 void certify(const Soup& input, const Soup& written, const std::vector<std::size_t>& source_face,
-             RegularizeReport& report, const ScannedSurface* scanned = nullptr);
+             RegularizeReport& report, const std::optional<ScannedSurface>& scanned = std::nullopt);
 
 }  // namespace polyheal
