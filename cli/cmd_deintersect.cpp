@@ -80,7 +80,8 @@ nlohmann::json to_json(const DeintersectArgs& a, const DeintersectReport& r, dou
         {"clearance", r.clearance},
         {"bbox_diagonal", r.bbox_diagonal},
         {"operations", a.ops},
-        {"max_displacement", r.max_displacement_allowed}}},
+        {"max_displacement", r.max_displacement_allowed},
+        {"max_trials", a.options.max_trials}}},
       {"faces", r.faces},
       {"vertices", r.vertices},
       {"intersecting_faces", {{"input", r.intersecting_faces_in}, {"output", r.intersecting_faces_out}}},
@@ -91,6 +92,7 @@ nlohmann::json to_json(const DeintersectArgs& a, const DeintersectReport& r, dou
                       {"pair_moves", r.pair_moves}, {"trials", r.trials},
                       {"stale", r.stale}, {"sources_skipped", r.sources_skipped}}},
       {"rounds", r.rounds},
+      {"out_of_trials", r.out_of_trials},
       {"topology", {{"input", topology_json(r.topology_in)}, {"output", topology_json(r.topology_out)}}},
       {"faces_changed", r.faces_changed},
       {"moved_vertices", r.moved_vertices},
@@ -121,6 +123,7 @@ void print_text(const DeintersectArgs& a, const DeintersectReport& r) {
   std::printf("  operations: %zu swaps, %zu hammers, %zu lifts, %zu group moves, %zu pair moves in %d rounds (%zu trials, "
               "%zu stale, %zu sources skipped)\n",
               r.swaps, r.hammers, r.lifts, r.group_moves, r.pair_moves, r.rounds, r.trials, r.stale, r.sources_skipped);
+  if (r.out_of_trials) std::printf("  stopped: the work budget (--max-trials %zu) was spent\n", a.options.max_trials);
   std::printf("  moved %zu vertices: max %.6g (%.3g%% of the bbox diagonal), mean %.6g; %zu faces changed\n",
               r.moved_vertices, r.max_displacement, 100.0 * r.max_displacement / diag, r.mean_displacement,
               r.faces_changed);
@@ -181,6 +184,9 @@ void add_deintersect(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1.0, 1e9));
   cmd->add_option("--max-rounds", args->options.max_rounds, "stop after this many rounds")
       ->default_val(100)->check(CLI::Range(1, 100000));
+  cmd->add_option("--max-trials", args->options.max_trials,
+                  "stop trying operations after N trials (0: no limit); what is left is reported")
+      ->default_val(0);
   cmd->add_option("--max-displacement", args->max_displacement,
                   "no vertex moves further than this from its input position: model units, or a percentage "
                   "of the bbox diagonal (default 2%); faces that would need more are left and reported");
@@ -212,6 +218,8 @@ void add_deintersect(CLI::App& app, int& exit_code) {
       r.group_moves += again.report.group_moves;
       r.pair_moves += again.report.pair_moves;
       r.rounds += again.report.rounds;
+      r.trials += again.report.trials;
+      r.out_of_trials = r.out_of_trials || again.report.out_of_trials;
       r.max_displacement += again.report.max_displacement;  // an upper bound
       r.intersecting_faces_exact = again.report.intersecting_faces_exact;
       result.soup = std::move(again.soup);

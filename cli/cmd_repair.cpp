@@ -97,6 +97,7 @@ nlohmann::json parameters_json(const RepairArgs& a, const Outcome& o) {
           {"fill_holes", a.options.fill_holes},
           {"max_hole_edges", a.options.max_hole_edges},
           {"max_deviation", o.max_deviation},
+          {"max_move_trials", a.options.move_trials},
           {"drop_enclosed", a.drop_enclosed},
           {"orient_outward", a.options.orient_outward},
           {"for", a.for_tool.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.for_tool)}};
@@ -358,6 +359,10 @@ void add_repair(CLI::App& app, int& exit_code) {
   cmd->add_option("--max-deviation", args->max_deviation,
                   "exit 1 when the Hausdorff distance to the input exceeds D (model units, or P% of the diagonal)")
       ->default_str("1%");
+  cmd->add_option("--max-move-trials", args->options.move_trials,
+                  "the local moves' work budget (deintersect stage), in trials (0: none); beyond it the union of "
+                  "what they left follows")
+      ->default_val(args->options.move_trials);
   cmd->add_flag("--keep-orientation", args->keep_orientation,
                 "do not turn inside-out components (negative volume, inside no other) outwards");
   cmd->add_flag("--drop-enclosed", args->drop_enclosed,

@@ -109,6 +109,10 @@ expect 1 "deintersect leaves deeply crossing spheres, exit 1" -- "$bin" deinters
 grep_out "still intersecting (output face ids)" "$tmp/out" "deintersect lists the faces left"
 expect 0 "deintersect re-check agrees: spheres output still intersects" -- test -s "$tmp/sph.off"
 expect 1 "deintersect output of the spheres does not check clean" -- "$bin" check "$tmp/sph.off"
+expect 1 "deintersect --max-trials stops the bones' moves short, exit 1" -- "$bin" deintersect --json --max-trials 500 "$src/fixtures/bones.off" -o "$tmp/bones_budget.off"
+grep_out '"out_of_trials": true' "$tmp/out" "deintersect json says the work budget stopped it"
+grep_out '"max_trials": 500' "$tmp/out" "deintersect json gives the work budget"
+expect 1 "deintersect --max-trials output still intersects (checked on the file)" -- "$bin" check "$tmp/bones_budget.off"
 expect 2 "deintersect refuses a non-manifold soup" -- "$bin" deintersect "$tmp/nonmanifold.off" -o "$tmp/nm_out.off"
 grep_out "deintersect needs a manifold mesh" "$tmp/err" "deintersect non-manifold refusal says why"
 expect 2 "deintersect bad clearance" -- "$bin" deintersect "$src/fixtures/tube_edge3.0.off" -o "$tmp/y.off" --clearance abc

@@ -490,6 +490,43 @@ TEST_CASE("deintersect: rounds that skip what nothing changed near end exactly a
   CHECK(fast.report.intersecting_pairs_out == slow.report.intersecting_pairs_out);
 }
 
+TEST_CASE("deintersect: a work budget stops the moves; what they did is valid, what is left reported",
+          "[repair][deintersect]") {
+  // bones takes seven rounds. With a third of its trials the moves stop
+  // inside a round: the operations found by then are still applied (each
+  // re-validated), so the written file must hold no intersecting face the
+  // input did not have, fewer than the input, the same topology, and the
+  // report must say so. A budget above what it needs changes nothing.
+  const Soup in = read_soup(test::fixture("bones.off"));
+  const DeintersectResult free_run = remove_self_intersections(in);
+  REQUIRE(free_run.report.rounds > 2);
+  REQUIRE_FALSE(free_run.report.out_of_trials);
+  DeintersectOptions o;
+  o.max_trials = free_run.report.trials / 3;
+  const DeintersectResult held = remove_self_intersections(in, o);
+  CHECK(held.report.out_of_trials);
+  CHECK(held.report.trials >= o.max_trials);
+  CHECK(held.report.trials < free_run.report.trials);
+  CHECK(held.report.rounds <= free_run.report.rounds);
+  const Soup out = written(held, "deintersect_budget.off");
+  const Report before = inspect(in), after = inspect(out);
+  CHECK(after.self_intersections.size() == held.report.intersecting_pairs_out);
+  CHECK(held.report.intersecting_faces_out > free_run.report.intersecting_faces_out);
+  CHECK(held.report.intersecting_faces_out < held.report.intersecting_faces_in);
+  std::set<std::size_t> was;
+  for (const FacePair& p : before.self_intersections) was.insert({p.first, p.second});
+  for (const FacePair& p : after.self_intersections) {
+    CHECK(was.count(p.first));  // faces keep their ids: none started intersecting
+    CHECK(was.count(p.second));
+  }
+  CHECK(topology_of(after) == topology_of(before));
+  o.max_trials = free_run.report.trials + 1;
+  const DeintersectResult ample = remove_self_intersections(in, o);
+  CHECK_FALSE(ample.report.out_of_trials);
+  CHECK(ample.soup.points == free_run.soup.points);
+  CHECK(ample.soup.indices == free_run.soup.indices);
+}
+
 TEST_CASE("deintersect: a non-manifold soup is refused", "[repair][deintersect]") {
   // Three triangles on one edge.
   const Soup in = test::soup({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}},

@@ -638,6 +638,31 @@ TEST_CASE("repair: parts that interpenetrate beyond --max-deviation go straight 
   CHECK(a.out.signed_volume == Approx(15.0));
 }
 
+TEST_CASE("repair: local moves stop at their work budget and the union of what they left follows, certified",
+          "[pipeline]") {
+  // The knot tube overlapping itself: its moves need ~9k trials. With a
+  // budget of 1000 the stage says it stopped there, its trial count stays
+  // near the budget (the operations found are still applied), and the
+  // union makes the written file certified all the same.
+  const Soup in = read_soup(test::fixture("knot_tube_r1.2.off"));
+  RepairOptions o;
+  o.move_trials = 1000;
+  const RepairResult r = repair(in, o);
+  const auto moves = std::find_if(r.report.stages.begin(), r.report.stages.end(),
+                                  [](const StageReport& s) { return s.name == "deintersect"; });
+  REQUIRE(moves != r.report.stages.end());
+  CHECK(moves->outcome.find("stopped after") != std::string::npos);
+  const auto trials = std::find_if(moves->counts.begin(), moves->counts.end(),
+                                   [](const auto& c) { return c.first == "trials"; });
+  REQUIRE(trials != moves->counts.end());
+  CHECK(trials->second >= 1000);
+  CHECK(trials->second < 2000);
+  CHECK((ran(r.report, "regularize", true) || ran(r.report, "regularize (without local moves)", true)));
+  const Assessment a = written(in, r, "pipe_knot_budget.off", 0.2 * r.report.diagonal);
+  CHECK(a.certified);
+  CHECK(a.dropped_components == 0);
+}
+
 TEST_CASE("repair: a part given twice goes straight to the union of its copies, a thin wall and its cavity do not",
           "[pipeline]") {
   // Two copies of a sphere 1e-5 apart cross each other all over, each

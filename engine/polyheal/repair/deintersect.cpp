@@ -79,15 +79,18 @@ class Deintersector {
   }
 
   std::size_t intersecting_faces() const { return intersecting_; }
+  /// The work budget (DeintersectOptions::max_trials) is used up.
+  bool spent() const { return o_.max_trials > 0 && r_.trials >= o_.max_trials; }
   std::size_t intersecting_pairs() const {
     std::size_t n = 0;
     for (const auto& p : partners_) n += p.size();
     return n / 2;
   }
 
-  /// Rounds of cost phase + implementation phase (§4.5) until nothing applies.
+  /// Rounds of cost phase + implementation phase (§4.5) until nothing
+  /// applies (or the work budget is spent).
   void run() {
-    while (intersecting_ > 0 && r_.rounds < o_.max_rounds) {
+    while (intersecting_ > 0 && r_.rounds < o_.max_rounds && !spent()) {
       ++r_.rounds;
       if (o_.observer) o_.observer->progress(1.0 - double(intersecting_) / double(std::max<std::size_t>(1, start_)));
       std::vector<Op> ops = cost_phase();
@@ -109,6 +112,7 @@ class Deintersector {
       }
       if (applied == 0) break;
     }
+    r_.out_of_trials = intersecting_ > 0 && spent();
   }
 
  private:
@@ -709,6 +713,7 @@ class Deintersector {
     if (!o_.hammer && !o_.group) vertices.clear();
     if (!o_.lift) faces.clear();
     for (const auto& [a, b] : edges) {
+      if (spent()) break;
       const auto [lo, hi] = std::minmax(std::uint32_t(a), std::uint32_t(b));
       if (!sources.retry({0, lo, hi}, {a, b})) continue;
       Op op;
@@ -724,6 +729,7 @@ class Deintersector {
     }
     std::unordered_map<std::size_t, Point> through;  // per vertex: its least through move within the limit
     for (vertex_descriptor v : vertices) {
+      if (spent()) break;
       std::optional<Point> to;
       if (!sources.retry({1, std::uint32_t(v)}, {v})) {
         to = sources.through(v);  // as it was: nothing near v changed
@@ -737,6 +743,7 @@ class Deintersector {
     }
     if (o_.group) group_ops(vertices, through, ops, sources);
     for (face_descriptor f : faces) {
+      if (spent()) break;
       const auto c = corners(f);
       if (sources.retry({2, std::uint32_t(id(f))}, {c[0], c[1], c[2]})) cheapest_valid(lift_ops(f), ops);
     }
@@ -746,6 +753,7 @@ class Deintersector {
     // had other operations did not come to them, and keeps no reach).
     if (ops.empty() && o_.group)
       for (face_descriptor f : intersecting) {
+        if (spent()) break;
         const std::vector<vertex_descriptor> nodes = nodes_crossing(f);
         std::vector<vertex_descriptor> vs = nodes;
         for (vertex_descriptor v : corners(f)) vs.push_back(v);
@@ -854,6 +862,7 @@ class Deintersector {
                  const std::unordered_map<std::size_t, Point>& through, std::vector<Op>& ops, Sources& sources) {
     std::unordered_set<std::size_t> done;
     for (vertex_descriptor seed : vertices) {
+      if (spent()) break;
       if (!through.count(std::size_t(seed)) || !done.insert(std::size_t(seed)).second) continue;
       Op op;
       op.kind = OpKind::group;
@@ -941,7 +950,8 @@ class Deintersector {
   /// after it get the candidates they got when it was tried.
   void pair_ops(const std::vector<face_descriptor>& faces, std::vector<Op>& ops, Sources& sources) {
     std::set<std::pair<std::size_t, std::size_t>> tried;
-    for (face_descriptor f : faces)
+    for (face_descriptor f : faces) {
+      if (spent()) break;
       for (face_descriptor g : partners_[id(f)]) {
         if (id(g) < id(f)) continue;  // each pair once
         const auto cf = corners(f), cg = corners(g);
@@ -962,6 +972,7 @@ class Deintersector {
           }
         cheapest_valid(std::move(candidates), ops);
       }
+    }
   }
 
   /// Among the valid candidates of one vertex or face, the one that moves

@@ -67,6 +67,12 @@ struct DeintersectOptions {
   ClearanceMode clearance_mode = ClearanceMode::edge_relative;
   double clearance = 0.02;  // see ClearanceMode
   int max_rounds = 100;
+  /// A work budget (0: none): no operation source is tried, and no round
+  /// started, after this many trials (DeintersectReport::trials); the
+  /// operations found by then are applied. What is left is reported as
+  /// still intersecting, with out_of_trials. Deterministic, unlike a time
+  /// limit. The repair pipeline sets one (pipeline.cpp: the union follows).
+  std::size_t max_trials = 0;
   /// No vertex moves further than this from its input position (model
   /// units; negative: max_displacement_ratio x the bbox diagonal). Faces
   /// that would need more are left and reported.
@@ -107,6 +113,7 @@ struct DeintersectReport {
   std::size_t sources_skipped = 0;   // edges, vertices, faces, groups a cost phase did not retry: nothing near changed
   std::size_t stale = 0;             // cost-phase operations no longer valid when their turn came
   int rounds = 0;
+  bool out_of_trials = false;  // stopped by max_trials with faces still intersecting
   std::size_t intersecting_faces_exact = 0;  // left in the working mesh, before writing
   std::size_t moved_vertices = 0;
   double max_displacement = 0, mean_displacement = 0;  // over the moved vertices, model units

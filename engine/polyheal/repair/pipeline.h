@@ -86,6 +86,9 @@ struct RepairOptions {
   /// rounding broke it (up to twice more), so that what is certified is what
   /// the file will hold. False: doubles (OFF, OBJ, PLY).
   bool float_coordinates = false;
+  /// The local moves' work budget, in trials (DeintersectOptions::max_trials;
+  /// 0: none): beyond it, the union of what they left follows (pipeline.cpp).
+  std::size_t move_trials = 60000;
   Observer* observer = nullptr;
 };
 
