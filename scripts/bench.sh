@@ -355,6 +355,15 @@ if want repair; then
     "$corpus/cgal__joint.off@-0.3,0,0.1,0.5"
   assembly asm_open_elephant.stl "$corpus/cgal__elephant-with-holes.off@0,0,0,1" "$corpus/cgal__fandisk.off@0.2,0.1,0,0.5"
   assembly asm_fandisk_twice.stl "$corpus/cgal__fandisk.off@0,0,0,1" "$corpus/cgal__fandisk.off@0.00001,0.000007,0,1"
+  # Raw offsets (`polyheal offset --raw`, 2% of the diagonal out): closed
+  # surfaces folded through themselves wherever the model is concave.
+  raw_offset_input() {  # raw_offset_input IN D NAME (offset --raw exits 1: written, not regularized)
+    rm -f "$work/$3"
+    "$b/polyheal" offset --raw --overwrite "$1" -d "$2" -o "$work/$3" >/dev/null 2>&1 || true
+    if [ -f "$work/$3" ]; then rp_inputs+=("$work/$3"); fi
+  }
+  raw_offset_input "$root/fixtures/anchor.off" 0.0583 raw_offset_anchor_+2pc.off
+  raw_offset_input "$corpus/vhacd__Hand1.off" 4.814 raw_offset_Hand1_+2pc.off
   for f in "${rp_inputs[@]}"; do
     [ -f "$f" ] || continue
     name=$(basename "$f")
@@ -612,7 +621,9 @@ tessellations, dirty soups, clean), the generated fixtures, and four multi-body
 models as a slicer or robot description gets them (`asm_*`: corpus parts placed
 into one binary STL by `polyheal_gen assembly`, see bench.sh: three parts
 overlapping deeply; one part inside out across two others; an open part with a
-closed one through it; a part given twice 1e-5 apart), repaired with the
+closed one through it; a part given twice 1e-5 apart), and two raw offsets
+(`raw_offset_*`: `polyheal offset --raw` by 2% of the diagonal, folded through
+themselves in every concave region), repaired with the
 defaults. Peer (`scripts/gen/cgal_repair_peer.cpp`): what a CGAL user assembles from
 PMP — `repair_polygon_soup`, `orient_polygon_soup`, `polygon_soup_to_polygon_mesh`,
 `triangulate_faces`, `stitch_borders`, `triangulate_hole` on every border, then
