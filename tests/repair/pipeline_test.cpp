@@ -15,6 +15,7 @@
 #include "polyheal/io/write.h"
 #include "polyheal/mesh/vec3.h"
 #include "polyheal/repair/near_sheets.h"
+#include "polyheal/repair/offset.h"
 #include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/pipeline.h"
 #include "support/builders.h"
@@ -57,6 +58,9 @@ TEST_CASE("repair: narrow tube walls are freed by local moves, faces away keep t
   const RepairResult r = repair(in);
   CHECK(ran(r.report, "deintersect", true));
   CHECK_FALSE(ran(r.report, "rebuild", true));
+  // The union of the tube as given is closer to it but merges the walls
+  // the moves kept apart (another topology): not kept.
+  CHECK(ran(r.report, "regularize (without local moves)", false));
   const Assessment a = written(in, r, "pipe_tube3.off", 0.01 * r.report.diagonal, true);
   CHECK(a.certified);
   CHECK(a.within_deviation);
@@ -660,6 +664,32 @@ TEST_CASE("repair: local moves stop at their work budget and the union of what t
   CHECK((ran(r.report, "regularize", true) || ran(r.report, "regularize (without local moves)", true)));
   const Assessment a = written(in, r, "pipe_knot_budget.off", 0.2 * r.report.diagonal);
   CHECK(a.certified);
+  CHECK(a.dropped_components == 0);
+}
+
+TEST_CASE("repair: a raw offset's union as given is kept over the union of the moved surface, nothing moved",
+          "[pipeline]") {
+  // anchor offset by 2% of its diagonal without regularization: a closed
+  // surface folded through itself in every concave region. The moves free
+  // some faces, the union of what they left is certified with another
+  // topology (other cavities) than the raw offset's; the union of the raw
+  // offset as given must then win on the surface moved (every output face
+  // lies on an input face), not lose on topology.
+  const Soup anchor = read_soup(test::fixture("anchor.off"));
+  OffsetOptions oo;
+  oo.distance = 0.0583;
+  oo.regularize = false;
+  const Soup in = offset(anchor, oo).soup;
+  const Report before = inspect(in);
+  REQUIRE(before.closed);
+  REQUIRE(before.self_intersections.size() > 100);
+  const RepairResult r = repair(in);
+  REQUIRE(ran(r.report, "deintersect", true));
+  REQUIRE(ran(r.report, "regularize", true));
+  CHECK(ran(r.report, "regularize (without local moves)", true));
+  const Assessment a = written(in, r, "pipe_raw_anchor.off", 0.01 * r.report.diagonal);
+  CHECK(a.certified);
+  CHECK(a.output_to_input <= a.error_bound);  // on the input: moved by the union of the moved surface
   CHECK(a.dropped_components == 0);
 }
 

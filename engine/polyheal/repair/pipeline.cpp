@@ -203,16 +203,29 @@ class Pipeline {
     // moves would push it apart from them and the union cut it away.
     if (!done()) orient_outward(true);
     std::optional<Soup> before_moves;  // the closed surface local moves started from
+    SurfaceTopology moves_kept;         // its topology, which the moves keep
     if (wanted(kStepDeintersect) && !done() && !cur_.report.self_intersections.empty()) {
       const double before = cur_.hausdorff();
-      if (cur_.report.closed && alternatives) before_moves = cur_.soup;
+      if (cur_.report.closed && alternatives) {
+        before_moves = cur_.soup;
+        moves_kept = topology_of(cur_.report);
+      }
       const StageReport& moves = deintersect();
       if (!moves.accepted || before + moves.hausdorff <= measure_bound()) before_moves.reset();
     }
     if (wanted(kStepRegularize)) {
       if (!done() && !cur_.report.certified_clean() && cur_.report.closed)
         regularize(cur_.soup, "regularize", &cur_.report.self_intersections, o_.float_coordinates && !alternatives);
-      if (before_moves) regularize(*before_moves, "regularize (without local moves)");
+      // The topology guard (stage()) keeps what local moves kept apart from
+      // a union that would merge it. Where the current surface is the union
+      // of what they left and has another topology than the surface they
+      // started from, that is gone anyway: the two unions compete on the
+      // distance to the input and the surface moved alone (a raw offset:
+      // the union of the moved surface has other cavities than the union
+      // of the surface as given, which moves nothing and is as close).
+      if (before_moves)
+        regularize(*before_moves, "regularize (without local moves)", nullptr, false,
+                   !(topology_of(cur_.report) == moves_kept));
     }
     // TetGen's tolerances (for_tetgen): nearly degenerate faces and sharp
     // folds on a surface that is otherwise clean, before the grid is tried.
@@ -329,9 +342,12 @@ class Pipeline {
   /// UnsupportedInput: the stage refuses this surface). The candidate
   /// replaces the current surface when it is better (see below).
   /// `clean_only`: a candidate not certified clean is not kept, whatever
-  /// TetGen defects it has fewer of.
+  /// TetGen defects it has fewer of. `any_topology`: a certified candidate
+  /// of another topology than the current surface's may replace it (see
+  /// outline()).
   template <class Run>
-  StageReport& stage(const char* name, Run run, bool only_within = false, bool clean_only = false) {
+  StageReport& stage(const char* name, Run run, bool only_within = false, bool clean_only = false,
+                     bool any_topology = false) {
     if (o_.observer) o_.observer->stage(name);
     StageReport s;
     s.name = name;
@@ -352,8 +368,8 @@ class Pipeline {
       // of opposite copies cancels to nothing in the clean stage).
       const bool empty = next.soup.face_count() == 0;
       const bool both_ok = next_ok && done();
-      bool better = !empty && (both_ok ? topology_of(next.report) == topology_of(cur_.report) &&
-                                             next.hausdorff() + bound < cur_.hausdorff()
+      const bool same_topology = any_topology || topology_of(next.report) == topology_of(cur_.report);
+      bool better = !empty && (both_ok ? same_topology && next.hausdorff() + bound < cur_.hausdorff()
                                        : next_ok || next.defects < cur_.defects);
       // Both certified, but the current surface moved beyond the deviation
       // limit (local moves pushing apart parts that touch or overlap): a
@@ -377,7 +393,7 @@ class Pipeline {
       // absorbed, the same in both): the one that moved the surface less is
       // the smaller repair — a union of the surface as given moves nothing,
       // local moves before it moved vertices for nothing.
-      if (!better && both_ok && !empty && topology_of(next.report) == topology_of(cur_.report) &&
+      if (!better && both_ok && !empty && same_topology &&
           std::abs(next.hausdorff() - cur_.hausdorff()) <= bound) {
         const bool cur_within = within_limit(cur_, result_.hole_fills);
         const bool next_within = within_limit(next, next_fills);
@@ -759,8 +775,9 @@ class Pipeline {
   /// first: a float union's moves can leave what the doubles' passes repair,
   /// and the grid then takes over; cycloidal as STL went 22 -> 78 s and kept
   /// 2% of its faces).
+  /// `any_topology`: see stage().
   void regularize(const Soup& from, const char* name, const std::vector<FacePair>* pairs = nullptr,
-                  bool floats = false) {
+                  bool floats = false, bool any_topology = false) {
     // A closed surface that encloses negative volume (exact sign) is inside
     // out whatever its overlaps: its union is empty (winding numbers <= 0),
     // and the union of the surface turned outwards is what it stands for.
@@ -783,7 +800,7 @@ class Pipeline {
                   " inside the union removed, " + std::to_string(r.components_removed) + " components enclosed";
       if (turn) s.outcome = "the surface encloses negative volume (inside out): its union turned outwards; " + s.outcome;
       return std::move(res.soup);
-    });
+    }, false, false, any_topology);
   }
 
   /// `simplify`: coarsen the grid's planar regions and decimate (rebuild.h).
