@@ -490,7 +490,7 @@ TEST_CASE("deintersect: rounds that skip what nothing changed near end exactly a
   CHECK(fast.report.intersecting_pairs_out == slow.report.intersecting_pairs_out);
 }
 
-TEST_CASE("deintersect: a work budget stops the moves; what they did is valid, what is left reported",
+TEST_CASE("deintersect: a work budget stops the moves, what they did is valid and what is left reported",
           "[repair][deintersect]") {
   // bones takes seven rounds. With a third of its trials the moves stop
   // inside a round: the operations found by then are still applied (each
