@@ -12,7 +12,9 @@
 #include <tbb/global_control.h>
 
 #include "polyheal/mesh/mesh.h"
+#include "polyheal/io/read.h"
 #include "polyheal/repair/detail/distance.h"
+#include "polyheal/repair/detail/winding.h"
 #include "support/builders.h"
 
 using namespace polyheal;
@@ -492,6 +494,66 @@ TEST_CASE("distance: input wholly inside the other surface, just under it all ov
   const double error = 1e-4;
   CHECK(detail::one_sided_distance_skipping(inner, outer, error, inside) == 0);
   CHECK(detail::one_sided_distances(inner, outer, error)[0] > 0.005);  // the surfaces are apart
+}
+
+TEST_CASE("distance: skipping the inside of a torus, large triangles across it measure as dense sampling does",
+          "[repair][distance]") {
+  // Triangles much larger than the tube (R 3, r 1) with corners inside it
+  // or near it: what lies outside is reached through the hole and past the
+  // tube, so the farthest point is often inside a triangle whose corners
+  // are all skipped, or along a piece that straddles the surface — where the
+  // bisection stops on the bound of what can lie between corners (every
+  // point within longest edge / sqrt(3) of a corner, and within |x - c| of
+  // the surface for a skipped corner c). The measure must agree with a dense
+  // sampling of each triangle: no lower than it by more than the error
+  // bound, no higher than its spacing allows.
+  const Soup torus = read_soup(test::fixture("torus.off"));
+  std::vector<std::array<Index, 3>> tris;
+  for (std::size_t f = 0; f < torus.face_count(); ++f) {
+    const FaceView v = torus.face(f);
+    tris.push_back({v[0], v[1], v[2]});
+  }
+  const detail::WindingNumber winding(torus.points, tris);
+  const detail::SurfaceDistance to(torus);
+  auto inside = [&](const Point3d& p) { return winding(p) >= 0.5; };
+  const double error = 1e-3;
+  std::vector<std::array<Point3d, 3>> cases;
+  const double kPi = 3.14159265358979323846;
+  auto on_core = [&](double degrees, double radius, double z) {
+    const double a = degrees * kPi / 180;
+    return Point3d{radius * std::cos(a), radius * std::sin(a), z};
+  };
+  cases.push_back({on_core(90, 3, 0), on_core(210, 3, 0), on_core(330, 3, 0)});  // all corners inside: the hole
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> angle(0, 360), radius(2.3, 3.7), height(-0.6, 0.6), far(3.7, 4.6);
+  for (int n = 0; n < 24; ++n) {
+    const double a = angle(rng);
+    cases.push_back({on_core(a, radius(rng), height(rng)), on_core(a + 100 + 60 * (n % 3), radius(rng), height(rng)),
+                     on_core(a + 200 + 40 * (n % 4), n % 2 ? far(rng) : radius(rng), height(rng))});
+  }
+  constexpr int kGrid = 240;
+  for (const auto& c : cases) {
+    double sampled = 0, spacing = 0;
+    for (int k = 0; k < 3; ++k)
+      spacing = std::max(spacing, std::sqrt((c[k][0] - c[(k + 1) % 3][0]) * (c[k][0] - c[(k + 1) % 3][0]) +
+                                            (c[k][1] - c[(k + 1) % 3][1]) * (c[k][1] - c[(k + 1) % 3][1]) +
+                                            (c[k][2] - c[(k + 1) % 3][2]) * (c[k][2] - c[(k + 1) % 3][2])) /
+                                      kGrid);
+    for (int i = 0; i <= kGrid; ++i)
+      for (int j = 0; i + j <= kGrid; ++j) {
+        const double u = double(i) / kGrid, v = double(j) / kGrid, w = 1 - u - v;
+        Point3d p;
+        for (int k = 0; k < 3; ++k) p[k] = w * c[0][k] + u * c[1][k] + v * c[2][k];
+        if (!inside(p)) sampled = std::max(sampled, std::sqrt(to.squared_distance(p)));
+      }
+    const Soup one = test::soup({c[0], c[1], c[2]}, {{0, 1, 2}});
+    const double measured = detail::one_sided_distance_skipping(one, torus, error, inside);
+    INFO("corners (" << c[0][0] << ", " << c[0][1] << ", " << c[0][2] << ") (" << c[1][0] << ", " << c[1][1] << ", "
+                     << c[1][2] << ") (" << c[2][0] << ", " << c[2][1] << ", " << c[2][2] << ")");
+    INFO("measured " << measured << ", sampled " << sampled << ", spacing " << spacing);
+    CHECK(measured >= sampled - error);
+    CHECK(measured <= sampled + spacing);
+  }
 }
 
 TEST_CASE("distance: a box query lists a triangle cut into pieces once", "[repair][distance]") {
