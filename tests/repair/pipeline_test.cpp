@@ -39,6 +39,23 @@ bool ran(const RepairReport& r, const std::string& stage, bool accepted) {
                      [&](const StageReport& s) { return s.name == stage && s.accepted == accepted; });
 }
 
+/// Every measurement of two assessments of one written file agrees (the
+/// inspection, `out`, aside).
+void check_same_measurements(const Assessment& a, const Assessment& b) {
+  CHECK(a.input_to_output == b.input_to_output);
+  CHECK(a.output_to_input == b.output_to_input);
+  CHECK(a.hausdorff == b.hausdorff);
+  CHECK(a.deviation == b.deviation);
+  CHECK(a.within_deviation == b.within_deviation);
+  CHECK(a.dropped_components == b.dropped_components);
+  CHECK(a.absorbed_faces == b.absorbed_faces);
+  CHECK(a.fill_faces == b.fill_faces);
+  CHECK(a.fill_distance == b.fill_distance);
+  CHECK(a.faces_kept == b.faces_kept);
+  CHECK(a.provenance == b.provenance);
+  CHECK(a.area_kept == b.area_kept);
+}
+
 }  // namespace
 
 TEST_CASE("repair: a clean input is returned unchanged, no stage runs", "[pipeline]") {
@@ -439,14 +456,7 @@ TEST_CASE("repair: the distances the stages measured are the result's, and asses
     const double limit = max_deviation_of({}, r.report.diagonal);
     const Assessment given = assess(in, r.input, back, limit, false, r.hole_fills, nullptr, &r.distances);
     const Assessment measured = assess(in, r.input, back, limit, false, r.hole_fills);
-    CHECK(given.input_to_output == measured.input_to_output);
-    CHECK(given.output_to_input == measured.output_to_input);
-    CHECK(given.hausdorff == measured.hausdorff);
-    CHECK(given.deviation == measured.deviation);
-    CHECK(given.within_deviation == measured.within_deviation);
-    CHECK(given.dropped_components == measured.dropped_components);
-    CHECK(given.fill_faces == measured.fill_faces);
-    CHECK(given.fill_distance == measured.fill_distance);
+    check_same_measurements(given, measured);
   }
 }
 
@@ -691,6 +701,26 @@ TEST_CASE("repair: a raw offset's union as given is kept over the union of the m
   CHECK(a.certified);
   CHECK(a.output_to_input <= a.error_bound);  // on the input: moved by the union of the moved surface
   CHECK(a.dropped_components == 0);
+}
+
+TEST_CASE("repair: the assessment the pipeline made of its result is what the written file measures",
+          "[pipeline]") {
+  // The knot tube: the union of the tube as given ties with the union of
+  // the moved one and is kept for moving less — a comparison that assesses
+  // both. The caller reuses that assessment for the file (same faces) but
+  // for the inspection; measured afresh on the file, it must be the same.
+  const Soup in = read_soup(test::fixture("knot_tube_r1.2.off"));
+  const RepairResult r = repair(in);
+  REQUIRE(ran(r.report, "regularize (without local moves)", true));
+  REQUIRE(r.assessment);
+  const std::string p = test::scratch("pipe_knot_assessed.off");
+  write_soup(r.soup, p);
+  const Soup written = read_soup(p);
+  REQUIRE(written.same_faces(r.soup));
+  const double limit = max_deviation_of(RepairOptions{}, r.report.diagonal);
+  const Assessment fresh = assess(in, r.input, written, limit, false, r.hole_fills);
+  CHECK(r.assessment->certified == fresh.certified);
+  check_same_measurements(*r.assessment, fresh);
 }
 
 TEST_CASE("repair: a part given twice goes straight to the union of its copies, a thin wall and its cavity do not",

@@ -48,6 +48,9 @@ struct State {
   double hausdorff() const { return std::max(distances[0], distances[1]); }  // to the input
   std::optional<bool> within;  // assess()ed within the deviation limit, no component dropped (asked lazily)
   double deviation = -1;       // the surface moved, as assess()ed with `within`
+  /// The assess() behind `within`, of this very soup (a turned copy keeps
+  /// `within` but not this: which side is inside changed).
+  std::optional<Assessment> assessment;
 };
 
 /// The surface without its closed components that are no larger than
@@ -171,6 +174,7 @@ class Pipeline {
       result_.hole_fills = std::move(best_fills);
     }
     result_.distances = cur_.distances;
+    result_.assessment = std::move(cur_.assessment);
     result_.soup = std::move(cur_.soup);
     r.seconds = seconds_since(t0);
     return std::move(result_);
@@ -324,10 +328,11 @@ class Pipeline {
   /// moved no more than the limit and no input component was dropped.
   bool within_limit(State& s, const std::vector<std::array<Point3d, 3>>& fills) const {
     if (!s.within) {
-      const Assessment a =
+      Assessment a =
           assess(input_, result_.input, s.soup, deviation_limit(), o_.for_tetgen, fills, &s.report, &s.distances);
       s.within = a.within_deviation && a.dropped_components == 0;
       s.deviation = a.deviation;
+      s.assessment = std::move(a);
     }
     return *s.within;
   }

@@ -34,6 +34,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -113,34 +114,6 @@ struct RepairReport {
   double seconds = 0;
 };
 
-struct RepairResult {
-  Soup soup;
-  RepairReport report;
-  Report input;  // the exact inspection of the input (assess() takes it)
-  /// Corners of the triangles the clean stage added to fill holes, as they
-  /// are in `soup` (fills a later stage changed are not listed): assess()
-  /// reports them apart from moved surface.
-  std::vector<std::array<Point3d, 3>> hole_fills;
-  /// detail::one_sided_distances(input, soup, 1e-4 x the input's bbox
-  /// diagonal) as the stages measured them: {input -> soup, soup -> input}
-  /// (assess() takes them for a written file that is `soup`).
-  std::array<double, 2> distances{0, 0};
-};
-
-/// Defects that keep a surface from certification: boundary, non-manifold
-/// and misoriented edges, non-manifold vertices, duplicate and degenerate
-/// faces, self-intersecting pairs (and, for TetGen, its tolerance issues).
-std::size_t defect_count(const Report& r, bool for_tetgen);
-/// The same by kind, in the order above: ("boundary edges", n), ... for
-/// each kind present; ("no face left", 1) for an empty surface.
-std::vector<std::pair<std::string, std::size_t>> defect_kinds(const Report& r, bool for_tetgen);
-bool certified(const Report& r, bool for_tetgen);
-
-RepairResult repair(const Soup& input, const RepairOptions& options = {});
-
-/// options.max_deviation, or its ratio of a bbox diagonal.
-double max_deviation_of(const RepairOptions& options, double diagonal);
-
 /// What a repair did to the surface, measured on the file as written.
 struct Assessment {
   Report out;                              // the exact inspection of the written file
@@ -173,6 +146,41 @@ struct Assessment {
   double max_deviation = 0;
   bool within_deviation = true;            // deviation <= max_deviation
 };
+
+struct RepairResult {
+  Soup soup;
+  RepairReport report;
+  Report input;  // the exact inspection of the input (assess() takes it)
+  /// Corners of the triangles the clean stage added to fill holes, as they
+  /// are in `soup` (fills a later stage changed are not listed): assess()
+  /// reports them apart from moved surface.
+  std::vector<std::array<Point3d, 3>> hole_fills;
+  /// detail::one_sided_distances(input, soup, 1e-4 x the input's bbox
+  /// diagonal) as the stages measured them: {input -> soup, soup -> input}
+  /// (assess() takes them for a written file that is `soup`).
+  std::array<double, 2> distances{0, 0};
+  /// assess() of `soup` with `hole_fills`, where the pipeline made it to
+  /// compare candidates (the tie and --max-deviation rules): its
+  /// measurements (distances, surface moved, losses, provenance) hold for a
+  /// written file that is `soup`; its `out` is the inspection of `soup`,
+  /// which a caller certifying the written file makes again.
+  std::optional<Assessment> assessment;
+};
+
+/// Defects that keep a surface from certification: boundary, non-manifold
+/// and misoriented edges, non-manifold vertices, duplicate and degenerate
+/// faces, self-intersecting pairs (and, for TetGen, its tolerance issues).
+std::size_t defect_count(const Report& r, bool for_tetgen);
+/// The same by kind, in the order above: ("boundary edges", n), ... for
+/// each kind present; ("no face left", 1) for an empty surface.
+std::vector<std::pair<std::string, std::size_t>> defect_kinds(const Report& r, bool for_tetgen);
+bool certified(const Report& r, bool for_tetgen);
+
+RepairResult repair(const Soup& input, const RepairOptions& options = {});
+
+/// options.max_deviation, or its ratio of a bbox diagonal.
+double max_deviation_of(const RepairOptions& options, double diagonal);
+
 
 /// `input_report`: inspect(input), which the caller has already made.
 /// `written_report`: inspect(written) with tetgen_segments = for_tetgen, if
