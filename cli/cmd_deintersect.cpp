@@ -186,7 +186,8 @@ void add_deintersect(CLI::App& app, int& exit_code) {
       ->default_val(100)->check(CLI::Range(1, 100000));
   cmd->add_option("--max-trials", args->options.max_trials,
                   "stop trying operations after N trials (0: no limit); what is left is reported")
-      ->default_val(0);
+      ->default_val(0)
+      ->check(count_check());
   cmd->add_option("--max-displacement", args->max_displacement,
                   "no vertex moves further than this from its input position: model units, or a percentage "
                   "of the bbox diagonal (default 2%); faces that would need more are left and reported");

@@ -367,14 +367,16 @@ void add_repair(CLI::App& app, int& exit_code) {
       ->default_str("1e-7%");
   cmd->add_flag("--no-fill-holes", args->no_fill, "leave boundary loops open");
   cmd->add_option("--max-hole-edges", args->options.max_hole_edges, "fill only loops of at most N edges (0: all)")
-      ->default_val(0);
+      ->default_val(0)
+      ->check(count_check());
   cmd->add_option("--max-deviation", args->max_deviation,
                   "exit 1 when the Hausdorff distance to the input exceeds D (model units, or P% of the diagonal)")
       ->default_str("1%");
   cmd->add_option("--max-move-trials", args->options.move_trials,
                   "the local moves' work budget (deintersect stage), in trials (0: none); beyond it the union of "
                   "what they left follows")
-      ->default_val(args->options.move_trials);
+      ->default_val(args->options.move_trials)
+      ->check(count_check());
   cmd->add_flag("--keep-orientation", args->keep_orientation,
                 "do not turn inside-out components (negative volume, inside no other) outwards");
   cmd->add_flag("--drop-enclosed", args->drop_enclosed,

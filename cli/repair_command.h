@@ -55,6 +55,19 @@ inline void parse_length(const std::string& option, const std::string& text, dou
   else absolute = v;
 }
 
+/// A count option (unsigned): CLI11 reads "-5" into an unsigned number as
+/// a huge one; this says what is wrong instead.
+inline const CLI::Validator& count_check() {
+  static const CLI::Validator check(
+      [](std::string& text) {
+        return !text.empty() && text.find_first_not_of("0123456789") == std::string::npos
+                   ? std::string()
+                   : "expected a whole number >= 0: " + text;
+      },
+      "");
+  return check;
+}
+
 /// The output format holds float32 coordinates only (STL): the repairs
 /// round their result to floats themselves.
 inline bool float_output(const RepairFiles& f) { return format_from_path(f.output) == Format::stl; }

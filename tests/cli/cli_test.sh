@@ -113,6 +113,9 @@ expect 1 "deintersect --max-trials stops the bones' moves short, exit 1" -- "$bi
 grep_out '"out_of_trials": true' "$tmp/out" "deintersect json says the work budget stopped it"
 grep_out '"max_trials": 500' "$tmp/out" "deintersect json gives the work budget"
 expect 1 "deintersect --max-trials output still intersects (checked on the file)" -- "$bin" check "$tmp/bones_budget.off"
+expect 2 "deintersect refuses a negative --max-trials" -- "$bin" deintersect --max-trials -5 "$src/fixtures/bones.off" -o "$tmp/bones_neg.off"
+expect 2 "repair refuses a negative --max-move-trials" -- "$bin" repair --max-move-trials -5 "$src/fixtures/bones.off" -o "$tmp/bones_neg.off"
+expect 2 "repair refuses a negative --max-hole-edges" -- "$bin" repair --max-hole-edges -3 "$src/fixtures/bones.off" -o "$tmp/bones_neg.off"
 expect 2 "deintersect refuses a non-manifold soup" -- "$bin" deintersect "$tmp/nonmanifold.off" -o "$tmp/nm_out.off"
 grep_out "deintersect needs a manifold mesh" "$tmp/err" "deintersect non-manifold refusal says why"
 expect 2 "deintersect bad clearance" -- "$bin" deintersect "$src/fixtures/tube_edge3.0.off" -o "$tmp/y.off" --clearance abc
