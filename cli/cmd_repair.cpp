@@ -263,17 +263,10 @@ void run(RepairArgs& args, int& exit_code) {
         // so does its assessment of that surface, where it made one — but for
         // the inspection, which certifies the file as read back.
         const bool same = written.same_faces(result.soup);
-        if (same && result.assessment) {
-          o.a = *result.assessment;
-          InspectOptions io;
-          io.tetgen_segments = args.options.for_tetgen;
-          o.a.out = inspect(written, io);
-          o.a.certified = certified(o.a.out, args.options.for_tetgen);
-          o.a.components_out = o.a.out.components;
-        } else {
-          o.a = assess(input, result.input, written, o.max_deviation, args.options.for_tetgen, result.hole_fills,
-                       nullptr, same ? &result.distances : nullptr);
-        }
+        o.a = same && result.assessment
+                  ? reinspected(*result.assessment, written, args.options.for_tetgen)
+                  : assess(input, result.input, written, o.max_deviation, args.options.for_tetgen, result.hole_fills,
+                           nullptr, same ? &result.distances : nullptr);
         if (o.a.certified && args.options.tetgen_accepts) {
           progress.stage("TetGen on the written file");
           o.a.out.tetgen_refused = !o.tetgen.accepts(written);

@@ -993,10 +993,11 @@ double max_deviation_of(const RepairOptions& o, double diagonal) {
   return o.max_deviation > 0 ? o.max_deviation : o.max_deviation_ratio * diagonal;
 }
 
-Assessment assess(const Soup& input, const Report& in, const Soup& written, double max_deviation, bool for_tetgen,
-                  const std::vector<std::array<Point3d, 3>>& hole_fills, const Report* written_report,
-                  const std::array<double, 2>* distances) {
-  Assessment a;
+namespace {
+
+/// a.out (written_report, or the inspection of `written`) and what follows
+/// from it alone.
+void inspect_written(Assessment& a, const Soup& written, bool for_tetgen, const Report* written_report) {
   if (written_report) {
     a.out = *written_report;
   } else {
@@ -1005,8 +1006,22 @@ Assessment assess(const Soup& input, const Report& in, const Soup& written, doub
     a.out = inspect(written, io);
   }
   a.certified = certified(a.out, for_tetgen);
-  a.components_in = in.components;
   a.components_out = a.out.components;
+}
+
+}  // namespace
+
+Assessment reinspected(Assessment measured, const Soup& written, bool for_tetgen) {
+  inspect_written(measured, written, for_tetgen, nullptr);
+  return measured;
+}
+
+Assessment assess(const Soup& input, const Report& in, const Soup& written, double max_deviation, bool for_tetgen,
+                  const std::vector<std::array<Point3d, 3>>& hole_fills, const Report* written_report,
+                  const std::array<double, 2>* distances) {
+  Assessment a;
+  inspect_written(a, written, for_tetgen, written_report);
+  a.components_in = in.components;
   a.diagonal = bbox_diagonal(in);
   a.max_deviation = max_deviation;
   a.error_bound = 1e-4 * a.diagonal;

@@ -181,7 +181,6 @@ RepairResult repair(const Soup& input, const RepairOptions& options = {});
 /// options.max_deviation, or its ratio of a bbox diagonal.
 double max_deviation_of(const RepairOptions& options, double diagonal);
 
-
 /// `input_report`: inspect(input), which the caller has already made.
 /// `written_report`: inspect(written) with tetgen_segments = for_tetgen, if
 /// the caller has it (else it is made here). `distances`:
@@ -192,5 +191,9 @@ Assessment assess(const Soup& input, const Report& input_report, const Soup& wri
                   bool for_tetgen,
                   const std::vector<std::array<Point3d, 3>>& hole_fills = {},
                   const Report* written_report = nullptr, const std::array<double, 2>* distances = nullptr);
+/// `measured` (an assess() of a surface with the same faces as `written`,
+/// e.g. RepairResult::assessment) with the inspection of `written` itself:
+/// the certificate is made on the file, the measurements are kept.
+Assessment reinspected(Assessment measured, const Soup& written, bool for_tetgen);
 
 }  // namespace polyheal
