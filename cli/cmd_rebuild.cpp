@@ -131,9 +131,10 @@ std::string where(const std::vector<Region>& regions, const char* what) {
 
 void print_text(const RebuildArgs& a, const RebuildReport& r) {
   std::printf("%s -> %s: rebuild on an overlay grid\n", a.input.c_str(), a.output.c_str());
-  std::printf("  input: %zu faces, %zu vertices, %zu groups; %zu zero-area faces left out, %zu faces reoriented, "
-              "%zu boundary loops\n",
-              r.faces, r.vertices, r.groups, r.zero_area_faces, r.reoriented_faces, r.boundary_loops);
+  std::printf("  input: %zu faces, %zu vertices, %zu groups; %zu zero-area and %zu duplicate faces left out, %zu faces "
+              "reoriented, %zu boundary loops\n",
+              r.faces, r.vertices, r.groups, r.zero_area_faces, r.duplicate_faces, r.reoriented_faces,
+              r.boundary_loops);
   if (r.inside_out_faces)
     std::printf("  %zu faces of components facing inwards (inside out, or a cavity of one) turned outward\n",
                 r.inside_out_faces);

@@ -214,6 +214,76 @@ std::size_t split_t_junctions(const std::vector<Point3d>& pts, std::vector<Tri>&
 
 }  // namespace
 
+DuplicateFaces resolve_duplicate_faces(const std::vector<std::array<Index, 3>>& tris, bool keep_sheets) {
+  // Opposite copies cancel in pairs (their winding-number contributions
+  // do); of what remains, one copy of the prevailing orientation is kept. A
+  // cancelled group is given back one copy where the surface around it
+  // needs exactly that copy (keep_needed_copies()).
+  // Copies found by sorting the faces by their sorted vertex triple (a
+  // node-based map from triple to faces allocated a list per face: 1.4 s
+  // of a 1M-face scan's repair). A group's copies come in face order and
+  // the groups in the order of their first face.
+  DuplicateFaces d;
+  auto sorted = [](Tri t) {
+    std::sort(t.begin(), t.end());
+    return t;
+  };
+  std::vector<std::pair<Tri, std::size_t>> by_set(tris.size());
+  for (std::size_t i = 0; i < tris.size(); ++i) by_set[i] = {sorted(tris[i]), i};
+  std::stable_sort(by_set.begin(), by_set.end());
+  std::vector<std::array<std::size_t, 3>> runs;  // (first face, [a, b) in by_set) of each group of copies
+  for_each_run(by_set, [&](std::size_t a, std::size_t b) {
+    if (b - a >= 2) runs.push_back({by_set[a].second, a, b});
+  });
+  std::sort(runs.begin(), runs.end());
+  d.keep.assign(tris.size(), 1);
+  std::vector<CancelledGroup> cancelled_groups;
+  std::vector<std::array<std::size_t, 2>> cancelled_runs;  // [a, b) in by_set, beside cancelled_groups
+  std::vector<std::size_t> copies;
+  for (const auto& [first, a, b] : runs) {
+    const Tri& s = by_set[a].first;
+    copies.clear();
+    for (std::size_t k = a; k < b; ++k) copies.push_back(by_set[k].second);
+    auto parity = [&](std::size_t i) {  // +1 when the cycle is (s0 s1 s2), -1 when reversed
+      const Tri& t = tris[i];
+      const int r0 = int(std::find(t.begin(), t.end(), s[0]) - t.begin());
+      return t[(r0 + 1) % 3] == s[1] ? 1 : -1;
+    };
+    int net = 0;
+    for (std::size_t i : copies) net += parity(i);
+    bool kept = false;
+    for (std::size_t i : copies) {
+      if (net != 0 && !kept && parity(i) == (net > 0 ? 1 : -1)) {
+        kept = true;
+        continue;
+      }
+      d.keep[i] = 0;
+    }
+    const std::size_t removed = copies.size() - (net != 0 ? 1 : 0);
+    const std::size_t cancelled = copies.size() - std::size_t(std::abs(net));
+    d.cancelled += cancelled;
+    d.dropped += removed - cancelled;
+    if (net == 0) {
+      const auto plus = std::find_if(copies.begin(), copies.end(), [&](std::size_t i) { return parity(i) > 0; });
+      const auto minus = std::find_if(copies.begin(), copies.end(), [&](std::size_t i) { return parity(i) < 0; });
+      cancelled_groups.push_back({*plus, *minus, copies.size()});
+      cancelled_runs.push_back({a, b});
+    }
+  }
+  d.opposite_kept = keep_needed_copies(tris, cancelled_groups, d.keep);
+  for (std::size_t g = 0; g < cancelled_groups.size(); ++g) {
+    const CancelledGroup& c = cancelled_groups[g];
+    if (d.keep[c.plus] || d.keep[c.minus]) {  // one copy kept, the others dropped as duplicates
+      d.cancelled -= c.copies;
+      d.dropped += c.copies - 1;
+    } else if (keep_sheets) {  // every copy stays
+      d.cancelled -= c.copies;
+      for (std::size_t k = cancelled_runs[g][0]; k < cancelled_runs[g][1]; ++k) d.keep[by_set[k].second] = 1;
+    }
+  }
+  return d;
+}
+
 CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
   CleanSoupResult result;
   CleanSoupReport& r = result.report;
@@ -245,68 +315,15 @@ CleanSoupResult clean_soup(const Soup& input, const CleanSoupOptions& o) {
     }
   }
 
-  // Duplicates: copies of one vertex set. Opposite copies cancel in pairs
-  // (their winding-number contributions do); of what remains, one copy of
-  // the prevailing orientation is kept. A cancelled group is given back one
-  // copy where the surface around it needs exactly that copy (see below).
+  // Duplicates: copies of one vertex set (resolve_duplicate_faces()).
   {
-    // Copies found by sorting the faces by their sorted vertex triple (a
-    // node-based map from triple to faces allocated a list per face: 1.4 s
-    // of a 1M-face scan's repair). A group's copies come in face order and
-    // the groups in the order of their first face.
-    auto sorted = [](Tri t) {
-      std::sort(t.begin(), t.end());
-      return t;
-    };
-    std::vector<std::pair<Tri, std::size_t>> by_set(tris.size());
-    for (std::size_t i = 0; i < tris.size(); ++i) by_set[i] = {sorted(tris[i]), i};
-    std::stable_sort(by_set.begin(), by_set.end());
-    std::vector<std::array<std::size_t, 3>> runs;  // (first face, [a, b) in by_set) of each group of copies
-    for_each_run(by_set, [&](std::size_t a, std::size_t b) {
-      if (b - a >= 2) runs.push_back({by_set[a].second, a, b});
-    });
-    std::sort(runs.begin(), runs.end());
-    std::vector<char> keep(tris.size(), 1);
-    std::vector<CancelledGroup> cancelled_groups;
-    std::vector<std::size_t> copies;
-    for (const auto& [first, a, b] : runs) {
-      const Tri& s = by_set[a].first;
-      copies.clear();
-      for (std::size_t k = a; k < b; ++k) copies.push_back(by_set[k].second);
-      auto parity = [&](std::size_t i) {  // +1 when the cycle is (s0 s1 s2), -1 when reversed
-        const Tri& t = tris[i];
-        const int r0 = int(std::find(t.begin(), t.end(), s[0]) - t.begin());
-        return t[(r0 + 1) % 3] == s[1] ? 1 : -1;
-      };
-      int net = 0;
-      for (std::size_t i : copies) net += parity(i);
-      bool kept = false;
-      for (std::size_t i : copies) {
-        if (net != 0 && !kept && parity(i) == (net > 0 ? 1 : -1)) {
-          kept = true;
-          continue;
-        }
-        keep[i] = 0;
-      }
-      const std::size_t removed = copies.size() - (net != 0 ? 1 : 0);
-      const std::size_t cancelled = copies.size() - std::size_t(std::abs(net));
-      r.cancelled_faces += cancelled;
-      r.duplicate_faces_dropped += removed - cancelled;
-      if (net == 0) {
-        const auto plus = std::find_if(copies.begin(), copies.end(), [&](std::size_t i) { return parity(i) > 0; });
-        const auto minus = std::find_if(copies.begin(), copies.end(), [&](std::size_t i) { return parity(i) < 0; });
-        cancelled_groups.push_back({*plus, *minus, copies.size()});
-      }
-    }
-    r.opposite_copies_kept = keep_needed_copies(tris, cancelled_groups, keep);
-    for (const CancelledGroup& g : cancelled_groups)
-      if (keep[g.plus] || keep[g.minus]) {  // one copy kept, the others dropped as duplicates
-        r.cancelled_faces -= g.copies;
-        r.duplicate_faces_dropped += g.copies - 1;
-      }
+    const DuplicateFaces d = resolve_duplicate_faces(tris, false);
+    r.duplicate_faces_dropped = d.dropped;
+    r.cancelled_faces = d.cancelled;
+    r.opposite_copies_kept = d.opposite_kept;
     std::size_t w = 0;
     for (std::size_t i = 0; i < tris.size(); ++i)
-      if (keep[i]) {
+      if (d.keep[i]) {
         tris[w] = tris[i];
         source[w++] = source[i];
       }

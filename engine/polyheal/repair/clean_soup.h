@@ -17,6 +17,7 @@
 // splits are new faces on existing vertices.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -58,6 +59,21 @@ struct CleanSoupResult {
   std::vector<std::int64_t> source;  // per output face: the input face it came from, -1 for hole fills
   CleanSoupReport report;
 };
+
+/// Which duplicate faces go, as clean_soup() decides (the file comment):
+/// copies of one vertex set (`tris`: welded vertex ids), opposite ones
+/// cancelling in pairs, one copy kept of the prevailing orientation, and a
+/// cancelled group given one copy back where the surface around it needs
+/// exactly that copy (a closed surface given a reversed stray copy keeps
+/// its face). `keep_sheets`: a cancelled group given nothing back keeps all
+/// its copies instead (a double-sided sheet, which the overlay grid wraps).
+struct DuplicateFaces {
+  std::vector<char> keep;          // per triangle
+  std::size_t dropped = 0;         // same-orientation copies beyond the first (and a group's given one back)
+  std::size_t cancelled = 0;       // opposite copies removed in pairs
+  std::size_t opposite_kept = 0;   // cancelling groups given one copy back
+};
+DuplicateFaces resolve_duplicate_faces(const std::vector<std::array<Index, 3>>& tris, bool keep_sheets);
 
 /// See the file comment. Never throws on a valid soup; an empty input gives
 /// an empty result.

@@ -113,7 +113,7 @@ struct RebuildReport {
   std::size_t zero_area_faces = 0;      // left out: they bound nothing
   std::size_t reoriented_faces = 0;     // flipped to agree with their component (inconsistent input)
   std::size_t inside_out_faces = 0;     // of components facing inwards (inside out; a cavity of one), turned
-  std::size_t duplicate_faces = 0;      // copies of a face beyond the first (cleanup only)
+  std::size_t duplicate_faces = 0;      // copies of a face left out (resolve_duplicate_faces())
   std::size_t stitched_edges = 0;       // border edges joined to their match (cleanup only)
   std::size_t boundary_loops = 0;       // of the welded input
   std::vector<Region> open_loops;       // each of them: its edges and where
