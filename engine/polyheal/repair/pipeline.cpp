@@ -120,9 +120,56 @@ std::vector<std::array<Point3d, 3>> tetgen_hazards(const Soup& s, const Report& 
   return out;
 }
 
+/// How the first clean stage decides on its hole fills. A fill trades
+/// boundary edges for whatever the fill crosses; which way ends better is
+/// known only at the end (cgal__ALSTOM_TEST4, a CAD part whose fills cross
+/// a nearly coplanar fan: more defects filled, so the holes were left open
+/// and the grid rebuilt it all, 1.8% of the diagonal from the input; filled,
+/// the local moves and the union keep 91% of its area exactly), so a repair
+/// that does not end within bounds is tried again from the input the other
+/// way (repair()).
+enum class Fills {
+  by_defects,  // kept when the filled surface has fewer defects (else the cleanup alone may be)
+  never,       // the cleanup alone
+  always,      // the filled surface, better or not
+};
+
+/// How a repair ended, to choose between two (repair()).
+struct Standing {
+  bool certified = false;
+  bool within = false;  // certified, within --max-deviation, no component dropped (assessed)
+  std::size_t defects = 0;
+  /// Ends better than `other`: within bounds where it is not, or certified
+  /// where it is not. (Not by how far beyond the bounds two results moved
+  /// the surface: on shark_b and planar_mesh the other choice moved it less
+  /// by rebuilding it all on the grid, where the first kept 89-95% of the
+  /// input's area exactly.)
+  bool better_than(const Standing& other) const {
+    if (within != other.within) return within;
+    return certified && !other.certified;
+  }
+};
+
+/// The grid rebuild of the input, made once for both repairs (it starts
+/// from the input, not from what the stages before it made): by `simplify`.
+using RebuildCache = std::array<std::optional<RebuildResult>, 2>;
+
 class Pipeline {
  public:
-  Pipeline(const Soup& input, const RepairOptions& o) : input_(input), o_(o) {}
+  Pipeline(const Soup& input, const RepairOptions& o, RebuildCache& rebuilt, Fills fills = Fills::by_defects)
+      : input_(input), o_(o), fills_(fills), rebuilt_(rebuilt) {}
+
+  /// After run(): how it ended.
+  const Standing& standing() const { return standing_; }
+
+  /// After run(): the other way for the hole fills, where the first clean
+  /// had a choice (it filled holes, and was not told how to decide) and the
+  /// repair did not end within bounds.
+  std::optional<Fills> other_fills() const {
+    if (fills_ != Fills::by_defects || !fill_choice_ || *fill_choice_ == Fills::by_defects || standing_.within)
+      return std::nullopt;
+    return *fill_choice_ == Fills::always ? Fills::never : Fills::always;
+  }
 
   RepairResult run() {
     const auto t0 = std::chrono::steady_clock::now();
@@ -172,6 +219,13 @@ class Pipeline {
       result_.report.stages.push_back(std::move(s));
       cur_ = std::move(*best);
       result_.hole_fills = std::move(best_fills);
+    }
+    standing_.certified = done();
+    standing_.defects = cur_.defects;
+    // (assessed where there is a choice to make: a second repair's, or whether to run one)
+    const bool choosing = fills_ != Fills::by_defects || (fill_choice_ && *fill_choice_ != Fills::by_defects);
+    if (standing_.certified && choosing) {
+      standing_.within = within_limit(cur_, result_.hole_fills);
     }
     result_.distances = cur_.distances;
     result_.assessment = std::move(cur_.assessment);
@@ -343,16 +397,20 @@ class Pipeline {
            o_.weld > 0 || o_.weld_ratio > 0;
   }
 
+  /// What a stage's candidate must also meet, or may skip, to be kept.
+  struct Rule {
+    bool only_within = false;   // not kept when it moves the surface beyond --max-deviation
+    bool clean_only = false;    // not kept unless certified clean, whatever TetGen defects it has fewer of
+    bool any_topology = false;  // a certified candidate of another topology may replace the current one (outline())
+    bool always = false;        // kept unless empty, better or not (the choice a second repair makes, repair())
+  };
+
   /// Runs one stage: `run()` returns the candidate surface (or throws
   /// UnsupportedInput: the stage refuses this surface). The candidate
-  /// replaces the current surface when it is better (see below).
-  /// `clean_only`: a candidate not certified clean is not kept, whatever
-  /// TetGen defects it has fewer of. `any_topology`: a certified candidate
-  /// of another topology than the current surface's may replace it (see
-  /// outline()).
+  /// replaces the current surface when it is better (see below), under
+  /// `rule`.
   template <class Run>
-  StageReport& stage(const char* name, Run run, bool only_within = false, bool clean_only = false,
-                     bool any_topology = false) {
+  StageReport& stage(const char* name, Run run, Rule rule = {}) {
     if (o_.observer) o_.observer->stage(name);
     StageReport s;
     s.name = name;
@@ -373,7 +431,7 @@ class Pipeline {
       // of opposite copies cancels to nothing in the clean stage).
       const bool empty = next.soup.face_count() == 0;
       const bool both_ok = next_ok && done();
-      const bool same_topology = any_topology || topology_of(next.report) == topology_of(cur_.report);
+      const bool same_topology = rule.any_topology || topology_of(next.report) == topology_of(cur_.report);
       bool better = !empty && (both_ok ? same_topology && next.hausdorff() + bound < cur_.hausdorff()
                                        : next_ok || next.defects < cur_.defects);
       // Both certified, but the current surface moved beyond the deviation
@@ -408,9 +466,13 @@ class Pipeline {
                        std::string("kept: as far from the input, but moves the surface less");
         }
       }
-      const bool beyond_limit = better && only_within && !within_limit(next, next_fills);
+      if (!better && !empty && rule.always) {
+        better = true;
+        s.outcome += (s.outcome.empty() ? "" : "; ") + std::string("kept: the other choice, tried to the end");
+      }
+      const bool beyond_limit = better && rule.only_within && !within_limit(next, next_fills);
       if (beyond_limit) better = false;
-      const bool unclean = better && clean_only && !next.report.certified_clean();
+      const bool unclean = better && rule.clean_only && !next.report.certified_clean();
       if (unclean) better = false;
       if (better) {
         s.accepted = true;
@@ -526,17 +588,31 @@ class Pipeline {
                       " of fins, flaps or walls left out (sheets hanging off the rest along edges used 3+ times)";
           return kept;
         },
-        /*only_within=*/true);
+        Rule{/*only_within=*/true});
   }
 
   void clean() {
-    const StageReport& s = clean_with(o_.fill_holes);
-    // Hole fills can cross the rest of the surface (overlapping patches
-    // around a gap): then the cleanup alone may still help.
-    if (!s.accepted && o_.fill_holes) clean_with(false);
+    // The first clean decides on the hole fills (fills_, repair()); later
+    // ones (after a rounding to floats) by their defects.
+    const Fills fills = fill_choice_ ? Fills::by_defects : fills_;
+    if (!o_.fill_holes || fills == Fills::never) {
+      clean_with(false);
+    } else {
+      filled_ = 0;
+      const StageReport& s = clean_with(true, fills == Fills::always);
+      // The choice, where there was one: the other is a second repair's.
+      if (!fill_choice_ && filled_ > 0) fill_choice_ = s.accepted ? Fills::always : Fills::never;
+      // Hole fills can cross the rest of the surface (overlapping patches
+      // around a gap): then the cleanup alone may still help.
+      if (!s.accepted) clean_with(false);
+    }
+    if (!fill_choice_) fill_choice_ = Fills::by_defects;  // no choice made: no holes to fill
   }
 
-  const StageReport& clean_with(bool fill) {
+  /// `always`: kept, better or not (Rule::always).
+  const StageReport& clean_with(bool fill, bool always = false) {
+    Rule rule;
+    rule.always = always;
     return stage(fill ? "clean" : "clean (no fill)", [&](StageReport& s) {
       CleanSoupOptions co;
       co.weld = o_.weld > 0 ? o_.weld : o_.weld_ratio * result_.report.diagonal;
@@ -565,6 +641,7 @@ class Pipeline {
                   {"holes_filled", double(r.holes_filled)},
                   {"hole_faces", double(r.hole_faces)},
                   {"holes_left", double(r.holes_left)}};
+      filled_ = r.holes_filled;
       if (r.near_vertices_welded) s.max_displacement = r.max_weld_move;
       std::ostringstream line;
       line << r.repeated_index_faces << " repeated-index and " << r.duplicate_faces_dropped + r.cancelled_faces
@@ -575,7 +652,7 @@ class Pipeline {
       if (r.near_vertices_welded) line << ", " << r.near_vertices_welded << " near vertices welded";
       s.outcome = line.str();
       return std::move(c.soup);
-    });
+    }, rule);
   }
 
   void degenerate() {
@@ -649,7 +726,7 @@ class Pipeline {
                   " vertices moved apart in " + std::to_string(r.rounds) + " rounds, " + std::to_string(r.refused) +
                   " moves refused (a face would intersect or degenerate)";
       return out;
-    }, false, true);
+    }, Rule{/*only_within=*/false, /*clean_only=*/true});
   }
 
   /// `tolerance`: how far the operations may move the surface (model units;
@@ -788,6 +865,8 @@ class Pipeline {
     // and the union of the surface turned outwards is what it stands for.
     const bool turn = o_.orient_outward && enclosed_volume_sign(from) < 0;
     const std::string title = turn ? std::string(name) + " (turned outwards)" : std::string(name);
+    Rule rule;
+    rule.any_topology = any_topology;
     stage(title.c_str(), [&](StageReport& s) {
       RegularizeOptions ro;
       ro.certify = false;
@@ -805,7 +884,7 @@ class Pipeline {
                   " inside the union removed, " + std::to_string(r.components_removed) + " components enclosed";
       if (turn) s.outcome = "the surface encloses negative volume (inside out): its union turned outwards; " + s.outcome;
       return std::move(res.soup);
-    }, false, false, any_topology);
+    }, rule);
   }
 
   /// `simplify`: coarsen the grid's planar regions and decimate (rebuild.h).
@@ -830,7 +909,9 @@ class Pipeline {
       // and the zip gives every patch up).
       if (o_.for_tetgen) ro.avoid = tetgen_hazards(input_, result_.input);
       ro.observer = o_.observer;
-      RebuildResult res = polyheal::rebuild(input_, ro);
+      std::optional<RebuildResult>& made = rebuilt_[simplify ? 1 : 0];
+      if (!made) made = polyheal::rebuild(input_, ro);
+      RebuildResult res = *made;
       const RebuildReport& r = res.report;
       cell = r.cell;
       s.counts = {{"cell", r.cell},
@@ -857,6 +938,11 @@ class Pipeline {
   State cur_;
   RepairResult result_;
   std::vector<std::array<Point3d, 3>> pending_fills_;  // of the last clean run, until it is kept
+  const Fills fills_;
+  RebuildCache& rebuilt_;
+  std::optional<Fills> fill_choice_;  // what the first clean chose (by_defects: it had no choice)
+  std::size_t filled_ = 0;            // holes the last clean filled
+  Standing standing_;
 };
 
 double triangle_area(const Point3d& a, const Point3d& b, const Point3d& c) {
@@ -984,9 +1070,66 @@ std::size_t defect_count(const Report& r, bool for_tetgen) {
 
 bool certified(const Report& r, bool for_tetgen) { return for_tetgen ? r.tetgen_ready() : r.certified_clean(); }
 
+namespace {
+
+/// How a repair ended, in words: "certified, surface moved 0.52 (within
+/// --max-deviation 1.1)", "12 defects left", ...
+std::string ending(const RepairResult& r, const Standing& st) {
+  std::ostringstream line;
+  if (!st.certified) {
+    line << st.defects << " defects left";
+    return line.str();
+  }
+  line << "certified";
+  if (!r.assessment) return line.str();
+  const Assessment& a = *r.assessment;
+  line << ", surface moved " << a.deviation << (a.within_deviation ? " (within" : " (more than") << " --max-deviation "
+       << a.max_deviation << ")";
+  if (a.dropped_components) line << ", " << a.dropped_components << " input components dropped";
+  return line.str();
+}
+
+/// The stage that stands for a whole repair whose result was not kept.
+StageReport not_kept(const RepairResult& r, const Standing& st, Fills fills, const std::string& why) {
+  StageReport s;
+  s.name = fills == Fills::never ? "repair with the holes left open" : "repair with the holes filled";
+  s.accepted = false;
+  s.faces_out = r.soup.face_count();
+  s.defects_after = st.defects;
+  s.hausdorff = std::max(r.distances[0], r.distances[1]);
+  s.seconds = r.report.seconds;
+  s.outcome = ending(r, st) + "; not kept: " + why;
+  return s;
+}
+
+}  // namespace
+
 RepairResult repair(const Soup& input, const RepairOptions& options) {
   if (input.face_count() == 0) throw UnsupportedInput("no faces: nothing to repair");
-  return Pipeline(input, options).run();
+  RebuildCache rebuilt;
+  Pipeline first(input, options, rebuilt);
+  RepairResult a = first.run();
+  const std::optional<Fills> other = first.other_fills();
+  if (!other) return a;
+  // The first repair did not end within bounds, and its first clean chose
+  // on its hole fills: the other way, from the input, to the end (Fills).
+  Pipeline second(input, options, rebuilt, *other);
+  RepairResult b = second.run();
+  const Fills chosen = *other == Fills::never ? Fills::always : Fills::never;
+  const double seconds = a.report.seconds + b.report.seconds;
+  if (second.standing().better_than(first.standing())) {
+    const StageReport s = not_kept(a, first.standing(), chosen,
+                                   std::string("repaired again from the input with the holes ") +
+                                       (*other == Fills::never ? "left open" : "filled") + " (below), which ends better");
+    b.report.stages.insert(b.report.stages.begin(), s);
+    b.report.seconds = seconds;
+    return b;
+  }
+  a.report.stages.push_back(not_kept(b, second.standing(), *other,
+                                     "tried from the input because the repair above did not end within bounds; it "
+                                     "ends no better"));
+  a.report.seconds = seconds;
+  return a;
 }
 
 double max_deviation_of(const RepairOptions& o, double diagonal) {
