@@ -57,7 +57,8 @@ inline nlohmann::json regularize_json(const RepairFiles& a, const RegularizeRepo
         {"intersecting_pairs", intersections},
         {"volume", r.out.signed_volume},
         {"defects", defects(r.out)}}},
-      {"pinches", {{"split", r.pinches_split}, {"max_displacement", r.pinch_displacement}}},
+      {"pinches",
+       {{"split", r.pinches_split}, {"edges_split", r.pinched_edges_split}, {"max_displacement", r.pinch_displacement}}},
       {"rounding",
        {{"merged_points", r.rounding_merged},
         {"collapsed_faces", r.rounding_collapsed},
@@ -113,8 +114,11 @@ inline void print_regularize_text(const RepairFiles& a, const RegularizeReport& 
   std::printf("  output: %zu triangles (%zu input faces kept bit for bit), %zu vertices (%zu new)\n", r.faces_out,
               r.faces_kept, r.vertices_out, r.new_vertices);
   if (r.pinches_split)
-    std::printf("  the union's boundary pinched at %zu vertices: one copy per cone, moved into it by at most %.3g\n",
-                r.pinches_split, r.pinch_displacement);
+    std::printf("  the union's boundary pinched at %zu vertices: one copy per cone, moved into it by at most %.3g%s\n",
+                r.pinches_split, r.pinch_displacement,
+                r.pinched_edges_split ? (" (" + std::to_string(r.pinched_edges_split) +
+                                         " of them the midpoints of edges it touched itself along)").c_str()
+                                      : "");
   if (r.float_rounded)
     std::printf("  rounding to floats (STL) moved %zu vertices, made %zu pairs intersect; deintersect moved %zu\n",
                 r.float_rounded, r.float_pairs, r.float_moves);

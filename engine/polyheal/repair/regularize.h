@@ -132,6 +132,7 @@ struct RegularizeReport {
   std::size_t rounding_merged = 0;     // distinct exact points that rounded to one double, or float (merged)
   std::size_t rounding_collapsed = 0;  // faces that lost a corner to such a merge (thinner than a double step)
   std::size_t pinches_split = 0;       // vertices where the union's boundary pinched (split into one per cone)
+  std::size_t pinched_edges_split = 0; // ... and edges whose ends could not part it: split at their midpoint, a pinch
   double pinch_displacement = 0;       // largest move of a pinch copy into its cone
   std::size_t rounding_pairs = 0;      // intersecting pairs rounding created (before their repair)
   std::size_t rounding_moves = 0;      // vertices deintersect moved to repair them
