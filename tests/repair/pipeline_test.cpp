@@ -13,6 +13,7 @@
 #include "polyheal/inspect/report.h"
 #include "polyheal/io/read.h"
 #include "polyheal/io/write.h"
+#include "polyheal/mesh/perturb.h"
 #include "polyheal/mesh/vec3.h"
 #include "polyheal/repair/near_sheets.h"
 #include "polyheal/repair/offset.h"
@@ -844,4 +845,31 @@ TEST_CASE("repair: a repair that ends beyond its bounds is tried again with the 
   const Assessment f = written(in, first, "retried_open.off", limit);
   CHECK(f.certified);
   CHECK_FALSE(f.within_deviation);
+}
+
+TEST_CASE("repair: of two repairs beyond the bounds, the one moving the surface less than half as far is kept",
+          "[pipeline]") {
+  // A tetrahedron crossed by a triangle, with one face given twice: the
+  // cleanup, kept for the copy it drops, fills the triangle's loop, and the
+  // repair ends 18% of the diagonal from the input with one input component
+  // dropped. With the loop left open it ends 1.1% away: beyond the 1% bound
+  // too, but the smaller repair, and nothing dropped (as without the copy).
+  const Soup base = read_soup(test::fixture("corpus/cgal__tetra_intersected_by_triangle.off"));
+  PerturbOptions po;
+  po.kind = PerturbKind::duplicates;
+  po.seed = 7;
+  const Soup in = perturb(base, po).soup;
+  REQUIRE(in.face_count() > base.face_count());
+  const RepairResult r = repair(in);
+  REQUIRE(!r.report.stages.empty());
+  CHECK(r.report.stages.front().name == "repair with the holes filled");
+  CHECK_FALSE(r.report.stages.front().accepted);
+  const double limit = 0.01 * r.report.diagonal;
+  const std::string p = test::scratch("tetra_repeated.off");
+  write_soup(r.soup, p);
+  const Assessment a = assess(in, r.input, read_soup(p), limit, false, r.hole_fills);
+  CHECK(a.certified);
+  CHECK(a.dropped_components == 0);
+  CHECK(a.deviation < 2 * limit);
+  CHECK(r.report.stages.front().hausdorff > 2 * a.deviation);
 }
