@@ -873,3 +873,30 @@ TEST_CASE("repair: of two repairs beyond the bounds, the one moving the surface 
   CHECK(a.deviation < 2 * limit);
   CHECK(r.report.stages.front().hausdorff > 2 * a.deviation);
 }
+
+TEST_CASE("repair: a certified surface that drops input components is set against the grid's", "[pipeline]") {
+  // trimesh's chair: every face given twice, one each way (double-sided
+  // sheets). With 10% of its faces split near-collinear, the split faces'
+  // copies no longer match: the union cancels the rest and keeps the split
+  // ones, certified, with two of the three input components dropped. The
+  // grid wraps the sheets and drops none.
+  const Soup base = read_soup(test::fixture("corpus/trimesh__chair_model.obj"));
+  PerturbOptions po;
+  po.kind = PerturbKind::near_collinear;
+  po.seed = 7;
+  const Soup in = perturb(base, po).soup;
+  const RepairResult r = repair(in);
+  CHECK(ran(r.report, "rebuild", true));
+  const std::string p = test::scratch("chair_split.off");
+  write_soup(r.soup, p);
+  const Assessment a = assess(in, r.input, read_soup(p), 0.01 * r.report.diagonal, false, r.hole_fills);
+  CHECK(a.certified);
+  CHECK(a.dropped_components == 0);
+  // the union it replaced
+  RepairOptions union_only;
+  union_only.steps = parse_steps("clean,degenerate,deintersect,regularize");
+  const RepairResult u = repair(in, union_only);
+  const Assessment b = written(in, u, "chair_split_union.off", 0.01 * u.report.diagonal);
+  CHECK(b.certified);
+  CHECK(b.dropped_components > 0);
+}

@@ -234,9 +234,8 @@ class Pipeline {
     // (assessed where there is a choice to make: a second repair's, or whether to run one)
     const bool choosing = fills_ != Fills::by_defects || (fill_choice_ && *fill_choice_ != Fills::by_defects);
     if (standing_.certified && choosing) {
-      standing_.within = within_limit(cur_, result_.hole_fills);
-      standing_.deviation = cur_.deviation;
-      standing_.dropped = cur_.dropped;
+      within_limit(cur_, result_.hole_fills);
+      standing_ = standing_of(cur_);
     }
     result_.distances = cur_.distances;
     result_.assessment = std::move(cur_.assessment);
@@ -299,13 +298,17 @@ class Pipeline {
     // TetGen's tolerances (for_tetgen): nearly degenerate faces and sharp
     // folds on a surface that is otherwise clean, before the grid is tried.
     if (tetgen_pass_due()) tetgen_pass();
-    if (wanted(kStepRebuild) && !done()) {
+    // A certified surface that drops input components (a union that
+    // cancelled a double-sided sheet but for a few faces): the grid, which
+    // wraps sheets, is tried too.
+    const bool dropping = wanted(kStepRebuild) && done() && !within_limit(cur_, result_.hole_fills) && cur_.dropped > 0;
+    if (wanted(kStepRebuild) && (!done() || dropping)) {
       // The grid's coarsening and feature placement can fold faces below
       // TetGen's angle or leave a vertex nearly on an edge; the grid surface
       // is a cell from the input already, and its spikes are about a cell
       // long: collapses may move it that far again. What they cannot fix,
       // the grid without coarsening (more faces) usually avoids.
-      const double cell = rebuild(true);
+      const double cell = rebuild(true, dropping);
       if (tetgen_pass_due()) tetgen_pass(cell);
       if (o_.for_tetgen && !done()) {
         rebuild(false);
@@ -357,6 +360,16 @@ class Pipeline {
   }
 
   bool wanted(RepairStep s) const { return (o_.steps & s) != 0; }
+  /// How `s` ends, as far as it is known (within_limit() asks the rest).
+  Standing standing_of(const State& s) const {
+    Standing st;
+    st.certified = certified(s.report, o_.for_tetgen);
+    st.within = st.certified && s.within.value_or(false);
+    st.deviation = s.deviation;
+    st.dropped = s.dropped;
+    st.defects = s.defects;
+    return st;
+  }
   bool done() const { return certified(cur_.report, o_.for_tetgen); }
   /// For TetGen: a clean surface its tolerances would still stop.
   bool tetgen_pass_due() const {
@@ -415,6 +428,7 @@ class Pipeline {
     bool clean_only = false;    // not kept unless certified clean, whatever TetGen defects it has fewer of
     bool any_topology = false;  // a certified candidate of another topology may replace the current one (outline())
     bool always = false;        // kept unless empty, better or not (the choice a second repair makes, repair())
+    bool beyond = false;        // both certified beyond the bounds: kept when it ends better (Standing::better_than)
   };
 
   /// Runs one stage: `run()` returns the candidate surface (or throws
@@ -477,6 +491,18 @@ class Pipeline {
           s.outcome += (s.outcome.empty() ? "" : "; ") +
                        std::string("kept: as far from the input, but moves the surface less");
         }
+      }
+      // Both certified and beyond the bounds (a union that cancelled a
+      // double-sided sheet to a few remnants, dropping components): the grid
+      // is kept when it drops none, or moves the surface less than half as
+      // far.
+      if (!better && both_ok && !empty && rule.beyond && !within_limit(cur_, result_.hole_fills) &&
+          !within_limit(next, next_fills) && standing_of(next).better_than(standing_of(cur_))) {
+        better = true;
+        s.outcome += (s.outcome.empty() ? "" : "; ") +
+                     std::string(next.dropped == 0 && cur_.dropped > 0
+                                     ? "kept: drops no input component, where the current surface drops some"
+                                     : "kept: moves the surface less than half as far as the current one");
       }
       if (!better && !empty && rule.always) {
         better = true;
@@ -902,11 +928,14 @@ class Pipeline {
 
   /// `simplify`: coarsen the grid's planar regions and decimate (rebuild.h).
   /// Returns the grid's cell size (0 when the stage was refused).
-  double rebuild(bool simplify) {
+  /// `beyond`: the current surface is certified beyond the bounds (Rule::beyond).
+  double rebuild(bool simplify, bool beyond = false) {
     // From the input, not the current surface: earlier stages may have
     // closed a sheet by filling its boundary (a flat double layer), which
     // the overlay grid would take for a volume.
     double cell = 0;
+    Rule rule;
+    rule.beyond = beyond;
     stage(simplify ? "rebuild" : "rebuild (not coarsened)", [&](StageReport& s) {
       RebuildOptions ro;
       ro.simplify = ro.decimate = simplify;
@@ -942,7 +971,7 @@ class Pipeline {
         line << "; " << r.sheet_facets + r.thin_facets << " sheet or thin facets wrapped in a shell";
       s.outcome = line.str();
       return std::move(res.soup);
-    });
+    }, rule);
     return cell;
   }
 
