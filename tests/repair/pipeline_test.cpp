@@ -13,7 +13,6 @@
 #include "polyheal/inspect/report.h"
 #include "polyheal/io/read.h"
 #include "polyheal/io/write.h"
-#include "polyheal/mesh/perturb.h"
 #include "polyheal/mesh/vec3.h"
 #include "polyheal/repair/near_sheets.h"
 #include "polyheal/repair/offset.h"
@@ -855,10 +854,7 @@ TEST_CASE("repair: of two repairs beyond the bounds, the one moving the surface 
   // dropped. With the loop left open it ends 1.1% away: beyond the 1% bound
   // too, but the smaller repair, and nothing dropped (as without the copy).
   const Soup base = read_soup(test::fixture("corpus/cgal__tetra_intersected_by_triangle.off"));
-  PerturbOptions po;
-  po.kind = PerturbKind::duplicates;
-  po.seed = 7;
-  const Soup in = perturb(base, po).soup;
+  const Soup in = test::perturbed(base, PerturbKind::duplicates, 7);
   REQUIRE(in.face_count() > base.face_count());
   const RepairResult r = repair(in);
   REQUIRE(!r.report.stages.empty());
@@ -881,10 +877,7 @@ TEST_CASE("repair: a certified surface that drops input components is set agains
   // ones, certified, with two of the three input components dropped. The
   // grid wraps the sheets and drops none.
   const Soup base = read_soup(test::fixture("corpus/trimesh__chair_model.obj"));
-  PerturbOptions po;
-  po.kind = PerturbKind::near_collinear;
-  po.seed = 7;
-  const Soup in = perturb(base, po).soup;
+  const Soup in = test::perturbed(base, PerturbKind::near_collinear, 7);
   const RepairResult r = repair(in);
   CHECK(ran(r.report, "rebuild", true));
   const std::string p = test::scratch("chair_split.off");

@@ -13,7 +13,6 @@
 #include "polyheal/io/read.h"
 #include "polyheal/io/write.h"
 #include "polyheal/mesh/errors.h"
-#include "polyheal/mesh/perturb.h"
 #include "polyheal/mesh/topology.h"
 #include "polyheal/mesh/vec3.h"
 #include "polyheal/mesh/weld.h"
@@ -311,10 +310,7 @@ TEST_CASE("rebuild: faces given twice, either way round, change nothing (an expo
   // cgal__pig). Resolved as the cleanup resolves them, the repeats and the
   // unwelded copies of corners leave the rebuild as it is without them.
   const Soup in = read_soup(test::fixture("corpus/cgal__elephant-with-holes.off"));
-  PerturbOptions po;
-  po.kind = PerturbKind::duplicates;
-  po.seed = 3;
-  const Soup dup = perturb(in, po).soup;
+  const Soup dup = test::perturbed(in, PerturbKind::duplicates, 3);
   const std::size_t repeats = dup.face_count() - in.face_count();
   REQUIRE(repeats > 100);
   const RebuildResult plain = rebuild(in), repeated = rebuild(dup);

@@ -16,7 +16,6 @@
 #include "polyheal/io/read.h"
 #include "polyheal/io/write.h"
 #include "polyheal/mesh/errors.h"
-#include "polyheal/mesh/perturb.h"
 #include "polyheal/mesh/vec3.h"
 #include "polyheal/repair/detail/distance.h"
 #include "polyheal/repair/regularize.h"
@@ -340,10 +339,7 @@ TEST_CASE("regularize: where the sheets along an edge are joined at both its end
   // at both ends of it: no copy of an end parts them (63 such edges were
   // left, uncertified).
   const Soup gears = read_soup(test::fixture("corpus/trimesh__cycloidal.ply"));
-  PerturbOptions po;
-  po.kind = PerturbKind::near_coplanar;
-  po.seed = 7;
-  const Soup in = perturb(gears, po).soup;
+  const Soup in = test::perturbed(gears, PerturbKind::near_coplanar, 7);
   const RegularizeResult r = regularize(in);
   const Report rep = inspect(written(r, "regularize_gears_lifted.off"));
   CHECK(rep.certified_clean());

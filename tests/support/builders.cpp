@@ -33,6 +33,13 @@ Soup box(const Point3d& lo, const Point3d& hi, bool inward) {
   return s;
 }
 
+Soup perturbed(const Soup& s, PerturbKind kind, std::uint64_t seed) {
+  PerturbOptions o;
+  o.kind = kind;
+  o.seed = seed;
+  return perturb(s, o).soup;
+}
+
 Soup concat(const Soup& a, const Soup& b) {
   Soup s = a;
   s.append(b);

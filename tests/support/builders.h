@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "polyheal/inspect/report.h"
+#include "polyheal/mesh/perturb.h"
 #include "polyheal/mesh/soup.h"
 
 namespace polyheal::test {
@@ -44,6 +45,9 @@ double ring_radius(const Soup& s, const Point3d& v);
 std::set<std::array<Point3d, 3>> faces_by_position(const Soup& s);
 
 std::string fixture(const std::string& name);   // path under fixtures/
+/// perturb() of `s` by `kind` with `seed`, the rest as `polyheal perturb`'s
+/// defaults (10% of the faces, epsilon 1e-9 of the local edge).
+Soup perturbed(const Soup& s, PerturbKind kind, std::uint64_t seed);
 std::string scratch(const std::string& name);   // a fresh path in the build tree
 void write_bytes(const std::string& path, const std::string& bytes);
 /// Runs a shell command; its stdout and stderr together.
