@@ -369,7 +369,7 @@ if want repair; then
     name=$(basename "$f")
     rp_count=$((rp_count + 1))
     timed 1200 "$work/rp.json" "$work/rp.err" "$b/polyheal" repair --json --overwrite "$f" -o "$work/rp_ours.off"
-    ours_s=$wall_s; ours_kb=$wall_kb
+    ours_s=$wall_s; ours_kb=$wall_kb; ours_code=$code  # (the --for tetgen run below sets code again)
     if [ "$code" -ge 2 ]; then
       rp_rows+="| $name | | error: $(head -c 100 "$work/rp.err") | | | | | | | | | | | | |"$'\n'
       continue
@@ -396,7 +396,7 @@ if want repair; then
       [ "$tg_for" = yes ] && rp_tg_for=$((rp_tg_for + 1))
       tg="$tg; --for tetgen: $tg_for"
     fi
-    ours="$v | $code | ${stages:-none} | $out_faces | $(awk -v f="$kept_f" -v a="$kept_a" 'BEGIN{printf "%.0f%% / %.0f%%", 100 * f, 100 * a}') | $(awk -v h="$h" -v m="$moved_rel" 'BEGIN{printf "%.3g%% / %.3g%%", 100 * h, 100 * m}') | $tg | $ours_s s, $((ours_kb / 1024)) MB"
+    ours="$v | $ours_code | ${stages:-none} | $out_faces | $(awk -v f="$kept_f" -v a="$kept_a" 'BEGIN{printf "%.0f%% / %.0f%%", 100 * f, 100 * a}') | $(awk -v h="$h" -v m="$moved_rel" 'BEGIN{printf "%.3g%% / %.3g%%", 100 * h, 100 * m}') | $tg | $ours_s s, $((ours_kb / 1024)) MB"
     peer="crashed or timed out | | | | "
     timed 300 "$work/peer.txt" /dev/null "$b/cgal_repair_peer" "$f" "$work/rp_cgal.off"
     if [ "$code" -eq 0 ]; then
