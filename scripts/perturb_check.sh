@@ -36,7 +36,7 @@ for f in "$corpus"/*; do
   [ -n "$faces" ] && [ "$faces" -gt 120000 ] && continue
   read -r base_exit base_moved <<<"$(repaired "$f" "$name.base")"
   for kind in near-coplanar near-collinear duplicates slivers; do
-    p="$work/$name.$kind.off"
+    p="$work/$name.$kind.in.off"
     "$bin" perturb "$f" -o "$p" --kind "$kind" --seed "$seed" --overwrite >/dev/null 2>&1 || continue
     read -r e m <<<"$(repaired "$p" "$name.$kind")"
     checked=$((checked + 1))
