@@ -229,14 +229,10 @@ class Pipeline {
       cur_ = std::move(*best);
       result_.hole_fills = std::move(best_fills);
     }
-    standing_.certified = done();
-    standing_.defects = cur_.defects;
     // (assessed where there is a choice to make: a second repair's, or whether to run one)
     const bool choosing = fills_ != Fills::by_defects || (fill_choice_ && *fill_choice_ != Fills::by_defects);
-    if (standing_.certified && choosing) {
-      within_limit(cur_, result_.hole_fills);
-      standing_ = standing_of(cur_);
-    }
+    if (done() && choosing) within_limit(cur_, result_.hole_fills);
+    standing_ = standing_of(cur_);
     result_.distances = cur_.distances;
     result_.assessment = std::move(cur_.assessment);
     result_.soup = std::move(cur_.soup);
@@ -300,8 +296,11 @@ class Pipeline {
     if (tetgen_pass_due()) tetgen_pass();
     // A certified surface that drops input components (a union that
     // cancelled a double-sided sheet but for a few faces): the grid, which
-    // wraps sheets, is tried too.
-    const bool dropping = wanted(kStepRebuild) && done() && !within_limit(cur_, result_.hole_fills) && cur_.dropped > 0;
+    // wraps sheets, is tried too. (A dropped component lies wholly farther
+    // than the limit from the output: with the input -> output distance
+    // within it, up to the measure's bound, none is, and it is not assessed.)
+    const bool dropping = wanted(kStepRebuild) && done() && cur_.distances[0] + measure_bound() > deviation_limit() &&
+                          !within_limit(cur_, result_.hole_fills) && cur_.dropped > 0;
     if (wanted(kStepRebuild) && (!done() || dropping)) {
       // The grid's coarsening and feature placement can fold faces below
       // TetGen's angle or leave a vertex nearly on an edge; the grid surface

@@ -1691,6 +1691,11 @@ void split_pinches(const Soup& input, bool input_manifold, RegularizeResult& res
     Index v;
     std::vector<std::vector<Index>> cones;  // corners, ascending; cones by their least corner
   };
+  // face f's corner at vertex v: 3f + its place in f
+  auto corner_at = [&](Index f, Index v) {
+    const FaceView fv = s.face(f);
+    return Index(3 * f + (fv[0] == v ? 0 : fv[1] == v ? 1 : 2));
+  };
   tbb::enumerable_thread_specific<std::vector<Pinch>> found;
   tbb::enumerable_thread_specific<std::vector<std::array<Index, 2>>> sheet_edges;  // (v, other end), v < other
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, starts.size() - 1), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -1699,10 +1704,7 @@ void split_pinches(const Soup& input, bool input_manifold, RegularizeResult& res
     for (std::size_t g = r.begin(); g != r.end(); ++g) {
       const std::size_t k0 = starts[g], k1 = starts[g + 1];
       const Index v = uses[k0].vertex();
-      auto corner = [&](Index f) {
-        const FaceView fv = s.face(f);
-        return Index(3 * f + (fv[0] == v ? 0 : fv[1] == v ? 1 : 2));
-      };
+      auto corner = [&](Index f) { return corner_at(f, v); };
       corners.clear();
       for (std::size_t k = k0; k < k1; ++k) corners.push_back(corner(uses[k].face));
       std::sort(corners.begin(), corners.end());
@@ -1851,10 +1853,7 @@ void split_pinches(const Soup& input, bool input_manifold, RegularizeResult& res
     Pinch pinch{m, {}};
     for (const auto& [f, h] : sheets) {
       std::vector<Index> corners;
-      for (Index g : {f, half[f], h, half[h]}) {
-        const FaceView fv = s.face(g);
-        corners.push_back(Index(3 * g + (fv[0] == m ? 0 : fv[1] == m ? 1 : 2)));
-      }
+      for (Index g : {f, half[f], h, half[h]}) corners.push_back(corner_at(g, m));
       std::sort(corners.begin(), corners.end());
       pinch.cones.push_back(std::move(corners));
     }
